@@ -1,0 +1,829 @@
+//! Clips: shared, immutable animation data, bound to skeletons by joint name and sampled with a cursor.
+//!
+//! # Time and samples
+//!
+//! A clip stores one strictly increasing array of key times (`times`, seconds, the first at or after 0),
+//! shared by every animated channel, and for each key time one *frame*: the values of all animated
+//! channels at that time, side by side (time-major). A channel that never changes is stored once as a
+//! constant; a channel the clip does not have takes the joint's bind value.
+//!
+//! Sampling at time `t`:
+//! - **Non-looping clip** (`looping == false`): `t` is clamped to `[0, duration]`. Before the first key
+//!   the first frame holds; after the last key the last frame holds. Between keys `k` and `k+1` values
+//!   are interpolated linearly (translation, scale) or by normalised lerp along the shortest path
+//!   (rotation). At a key time the stored value is returned bit for bit. A clip of N frames sampled
+//!   uniformly at rate `r` has keys at `0, 1/r, ..., (N-1)/r` and duration `(N-1)/r`: its last frame is
+//!   its end.
+//! - **Looping clip** (`looping == true`): `t` is wrapped into `[0, duration)` (negative times wrap
+//!   too). Between the last key and `duration` the values run from the last frame back to the first,
+//!   which is reached again at `duration`. A looping clip of N frames at rate `r` has keys at
+//!   `0, ..., (N-1)/r` and duration `N/r`: frame 0 is *not* repeated at the end, and the segment after
+//!   frame N-1 interpolates towards frame 0. When a source repeats frame 0 as its last frame, the
+//!   wrap segment has length zero and nothing changes.
+//!
+//! An additive clip stores, per channel, a difference from a reference pose: a translation to add, a
+//! rotation to apply before the base rotation (`delta * base`), and a scale factor. Missing channels of an
+//! additive clip are the identity difference.
+
+use crate::skeleton::{JointIndex, Skeleton};
+use crate::Transform;
+use glam::{Quat, Vec3};
+
+/// A keyed curve: strictly increasing times with one value each, linearly interpolated.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Curve<T> {
+    /// Key times, seconds, strictly increasing.
+    pub times: Vec<f32>,
+    /// One value per key time.
+    pub values: Vec<T>,
+}
+
+impl<T> Curve<T> {
+    /// A curve from parallel arrays.
+    pub fn new(times: Vec<f32>, values: Vec<T>) -> Self {
+        Self { times, values }
+    }
+    /// True when the curve has no keys (the channel is not animated by this clip).
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+}
+
+/// The curves of one joint, as a clip is built.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TrackCurves {
+    /// Name of the joint this track drives.
+    pub joint: String,
+    /// Translation keys; empty when the clip does not drive translation.
+    pub translation: Curve<Vec3>,
+    /// Rotation keys; empty when the clip does not drive rotation.
+    pub rotation: Curve<Quat>,
+    /// Scale keys; empty when the clip does not drive scale.
+    pub scale: Curve<Vec3>,
+}
+
+/// Where a channel's value comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Channel<T> {
+    /// Not stored: the joint's bind value (identity difference in an additive clip).
+    Bind,
+    /// The same value at all times.
+    Constant(T),
+    /// Animated: the value sits at this float offset inside every frame.
+    Animated(u32),
+}
+
+/// One joint's channels inside a [`Clip`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// Name of the joint this track drives.
+    pub joint: String,
+    /// Translation channel.
+    pub translation: Channel<Vec3>,
+    /// Rotation channel.
+    pub rotation: Channel<Quat>,
+    /// Scale channel.
+    pub scale: Channel<Vec3>,
+}
+
+/// Why a clip could not be built or used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ClipError {
+    /// A curve's times and values differ in length.
+    #[error("track {0:?}: times and values differ in length")]
+    LengthMismatch(String),
+    /// Key times are not strictly increasing, negative or not finite.
+    #[error("track {0:?}: key times must be finite, at or after 0, and strictly increasing")]
+    BadTimes(String),
+    /// A key value is NaN or infinite.
+    #[error("track {0:?}: non-finite key value")]
+    NonFinite(String),
+    /// Duration negative or not finite, or shorter than the last key.
+    #[error("duration {0} is not finite, negative, or before the last key")]
+    BadDuration(f32),
+    /// Two tracks drive the same joint.
+    #[error("two tracks drive joint {0:?}")]
+    DuplicateTrack(String),
+    /// Frame data does not match the declared layout.
+    #[error("frame data holds {got} floats; the layout needs {expected}")]
+    FrameSize {
+        /// Floats the layout needs.
+        expected: usize,
+        /// Floats present.
+        got: usize,
+    },
+    /// A channel's offset points outside the frame.
+    #[error("track {0:?}: channel offset outside the frame")]
+    BadOffset(String),
+    /// A buffer given to sampling has the wrong length.
+    #[error("output has {got} joints; the skeleton has {expected}")]
+    OutputLength {
+        /// Joints in the skeleton.
+        expected: usize,
+        /// Joints in the output.
+        got: usize,
+    },
+    /// The binding was made for another clip or skeleton.
+    #[error("binding does not belong to this clip and skeleton")]
+    BindingMismatch,
+}
+
+/// Shared, immutable animation data. See the module docs for its time semantics.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Clip {
+    name: String,
+    duration: f32,
+    sample_rate: f32,
+    looping: bool,
+    additive: bool,
+    times: Vec<f32>,
+    tracks: Vec<Track>,
+    stride: usize,
+    frames: Vec<f32>,
+}
+
+fn check_curve<T>(joint: &str, c: &Curve<T>, finite: impl Fn(&T) -> bool) -> Result<(), ClipError> {
+    if c.times.len() != c.values.len() {
+        return Err(ClipError::LengthMismatch(joint.into()));
+    }
+    let mut prev = -1.0f32;
+    for &t in &c.times {
+        if !t.is_finite() || t < 0.0 || t <= prev {
+            return Err(ClipError::BadTimes(joint.into()));
+        }
+        prev = t;
+    }
+    if !c.values.iter().all(finite) {
+        return Err(ClipError::NonFinite(joint.into()));
+    }
+    Ok(())
+}
+
+/// Value of a linear curve at `t` (clamped at the ends); exact at key times.
+fn curve_at<T: Copy>(c: &Curve<T>, t: f32, lerp: impl Fn(T, T, f32) -> T) -> T {
+    let k = c.times.partition_point(|&x| x <= t);
+    if k == 0 {
+        return c.values[0];
+    }
+    if k >= c.times.len() {
+        return c.values[c.values.len() - 1];
+    }
+    let (t0, t1) = (c.times[k - 1], c.times[k]);
+    let a = (t - t0) / (t1 - t0);
+    if a <= 0.0 {
+        c.values[k - 1]
+    } else {
+        lerp(c.values[k - 1], c.values[k], a)
+    }
+}
+
+/// Normalised lerp along the shortest path.
+#[inline]
+pub fn nlerp(a: Quat, b: Quat, alpha: f32) -> Quat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    (a * (1.0 - alpha) + b * alpha).normalize()
+}
+
+impl Clip {
+    /// Builds a clip from per-joint curves.
+    ///
+    /// Every key time of every curve becomes a key time of the clip, so sampling the clip at any source
+    /// key time gives that source value exactly. A curve whose values are all equal is stored once as a
+    /// constant. `sample_rate` is the nominal rate of the source (used by bakes and reports), not a
+    /// resampling.
+    pub fn from_curves(
+        name: impl Into<String>,
+        duration: f32,
+        sample_rate: f32,
+        looping: bool,
+        additive: bool,
+        tracks: Vec<TrackCurves>,
+    ) -> Result<Clip, ClipError> {
+        let mut seen = std::collections::HashSet::new();
+        for t in &tracks {
+            if !seen.insert(t.joint.as_str()) {
+                return Err(ClipError::DuplicateTrack(t.joint.clone()));
+            }
+            check_curve(&t.joint, &t.translation, |v| v.is_finite())?;
+            check_curve(&t.joint, &t.rotation, |v| v.is_finite())?;
+            check_curve(&t.joint, &t.scale, |v| v.is_finite())?;
+        }
+        fn constant<T: PartialEq + Copy>(c: &Curve<T>) -> Option<T> {
+            let first = *c.values.first()?;
+            c.values.iter().all(|v| *v == first).then_some(first)
+        }
+        let mut times: Vec<f32> = Vec::new();
+        let mut out_tracks = Vec::with_capacity(tracks.len());
+        let mut stride = 0usize;
+        for t in &tracks {
+            let mut channel_t = Channel::Bind;
+            let mut channel_r = Channel::Bind;
+            let mut channel_s = Channel::Bind;
+            if !t.translation.is_empty() {
+                channel_t = match constant(&t.translation) {
+                    Some(v) => Channel::Constant(v),
+                    None => {
+                        times.extend_from_slice(&t.translation.times);
+                        stride += 3;
+                        Channel::Animated((stride - 3) as u32)
+                    }
+                };
+            }
+            if !t.rotation.is_empty() {
+                channel_r = match constant(&t.rotation) {
+                    Some(v) => Channel::Constant(v.normalize()),
+                    None => {
+                        times.extend_from_slice(&t.rotation.times);
+                        stride += 4;
+                        Channel::Animated((stride - 4) as u32)
+                    }
+                };
+            }
+            if !t.scale.is_empty() {
+                channel_s = match constant(&t.scale) {
+                    Some(v) => Channel::Constant(v),
+                    None => {
+                        times.extend_from_slice(&t.scale.times);
+                        stride += 3;
+                        Channel::Animated((stride - 3) as u32)
+                    }
+                };
+            }
+            out_tracks.push(Track {
+                joint: t.joint.clone(),
+                translation: channel_t,
+                rotation: channel_r,
+                scale: channel_s,
+            });
+        }
+        times.sort_by(f32::total_cmp);
+        times.dedup();
+        if times.is_empty() {
+            times.push(0.0);
+        }
+        let last = times[times.len() - 1];
+        if !duration.is_finite() || duration < 0.0 || (stride > 0 && duration < last) {
+            return Err(ClipError::BadDuration(duration));
+        }
+        let mut frames = vec![0.0f32; times.len() * stride];
+        for (src, dst) in tracks.iter().zip(&out_tracks) {
+            for (f, &time) in times.iter().enumerate() {
+                let frame = &mut frames[f * stride..(f + 1) * stride];
+                if let Channel::Animated(o) = dst.translation {
+                    let v = curve_at(&src.translation, time, |a, b, x| a.lerp(b, x));
+                    frame[o as usize..o as usize + 3].copy_from_slice(&v.to_array());
+                }
+                if let Channel::Animated(o) = dst.rotation {
+                    let v = curve_at(&src.rotation, time, nlerp);
+                    frame[o as usize..o as usize + 4].copy_from_slice(&v.to_array());
+                }
+                if let Channel::Animated(o) = dst.scale {
+                    let v = curve_at(&src.scale, time, |a, b, x| a.lerp(b, x));
+                    frame[o as usize..o as usize + 3].copy_from_slice(&v.to_array());
+                }
+            }
+        }
+        Clip::from_parts(
+            name.into(),
+            duration,
+            sample_rate,
+            looping,
+            additive,
+            times,
+            out_tracks,
+            stride,
+            frames,
+        )
+    }
+
+    /// Assembles a clip from its stored layout (what the `.sinew` reader holds), checking every part.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_parts(
+        name: String,
+        duration: f32,
+        sample_rate: f32,
+        looping: bool,
+        additive: bool,
+        times: Vec<f32>,
+        tracks: Vec<Track>,
+        stride: usize,
+        frames: Vec<f32>,
+    ) -> Result<Clip, ClipError> {
+        let curve = Curve {
+            times: times.clone(),
+            values: vec![(); times.len()],
+        };
+        check_curve(&name, &curve, |_| true)?;
+        if times.is_empty() {
+            return Err(ClipError::BadTimes(name));
+        }
+        if !duration.is_finite()
+            || duration < 0.0
+            || (stride > 0 && duration < times[times.len() - 1])
+        {
+            return Err(ClipError::BadDuration(duration));
+        }
+        let expected = times
+            .len()
+            .checked_mul(stride)
+            .ok_or(ClipError::FrameSize {
+                expected: usize::MAX,
+                got: frames.len(),
+            })?;
+        if frames.len() != expected {
+            return Err(ClipError::FrameSize {
+                expected,
+                got: frames.len(),
+            });
+        }
+        if !frames.iter().all(|v| v.is_finite()) {
+            return Err(ClipError::NonFinite(name));
+        }
+        let mut seen = std::collections::HashSet::new();
+        for t in &tracks {
+            if !seen.insert(t.joint.as_str()) {
+                return Err(ClipError::DuplicateTrack(t.joint.clone()));
+            }
+            let ok = |c: Option<u32>, n: usize| c.is_none_or(|o| (o as usize) + n <= stride);
+            let off = |c: &Channel<Vec3>| match c {
+                Channel::Animated(o) => Some(*o),
+                _ => None,
+            };
+            let off_r = match t.rotation {
+                Channel::Animated(o) => Some(o),
+                _ => None,
+            };
+            if !ok(off(&t.translation), 3) || !ok(off_r, 4) || !ok(off(&t.scale), 3) {
+                return Err(ClipError::BadOffset(t.joint.clone()));
+            }
+            let finite = match (t.translation, t.rotation, t.scale) {
+                (Channel::Constant(v), _, _) if !v.is_finite() => false,
+                (_, Channel::Constant(q), _) if !q.is_finite() => false,
+                (_, _, Channel::Constant(v)) if !v.is_finite() => false,
+                _ => true,
+            };
+            if !finite {
+                return Err(ClipError::NonFinite(t.joint.clone()));
+            }
+        }
+        Ok(Clip {
+            name,
+            duration,
+            sample_rate,
+            looping,
+            additive,
+            times,
+            tracks,
+            stride,
+            frames,
+        })
+    }
+
+    /// Clip name.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Duration in seconds.
+    pub fn duration(&self) -> f32 {
+        self.duration
+    }
+    /// Nominal sample rate of the source, frames per second.
+    pub fn sample_rate(&self) -> f32 {
+        self.sample_rate
+    }
+    /// Whether time wraps around (see the module docs).
+    pub fn looping(&self) -> bool {
+        self.looping
+    }
+    /// Whether the clip holds differences from a reference pose.
+    pub fn additive(&self) -> bool {
+        self.additive
+    }
+    /// Key times shared by every animated channel.
+    pub fn times(&self) -> &[f32] {
+        &self.times
+    }
+    /// Tracks, one per driven joint.
+    pub fn tracks(&self) -> &[Track] {
+        &self.tracks
+    }
+    /// Floats per frame.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+    /// All frames, time-major: frame `k` is `frames[k * stride .. (k + 1) * stride]`.
+    pub fn frames(&self) -> &[f32] {
+        &self.frames
+    }
+    /// Returns a copy with another name.
+    pub fn renamed(&self, name: impl Into<String>) -> Clip {
+        Clip {
+            name: name.into(),
+            ..self.clone()
+        }
+    }
+    /// Returns a copy with another looping flag.
+    pub fn with_looping(&self, looping: bool) -> Clip {
+        Clip {
+            looping,
+            ..self.clone()
+        }
+    }
+
+    /// Maps a playback time to the clip's own time, per the looping rule.
+    #[inline]
+    pub fn local_time(&self, t: f32) -> f32 {
+        if !t.is_finite() {
+            return 0.0;
+        }
+        if self.looping && self.duration > 0.0 {
+            let r = t.rem_euclid(self.duration);
+            if r >= self.duration {
+                0.0
+            } else {
+                r
+            }
+        } else {
+            t.clamp(0.0, self.duration)
+        }
+    }
+}
+
+/// A clip bound to a skeleton: for each track, the joint it drives. Made once, reused every frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClipBinding {
+    joint_of_track: Vec<Option<JointIndex>>,
+    unmatched: Vec<String>,
+    driven: Vec<JointIndex>,
+    skeleton_len: usize,
+}
+
+impl ClipBinding {
+    /// Binds the clip's tracks to the skeleton's joints by exact name.
+    pub fn new(clip: &Clip, skeleton: &Skeleton) -> ClipBinding {
+        let mut joint_of_track = Vec::with_capacity(clip.tracks.len());
+        let mut unmatched = Vec::new();
+        let mut driven = Vec::new();
+        for t in &clip.tracks {
+            let j = skeleton.find(&t.joint);
+            match j {
+                Some(j) => driven.push(j),
+                None => unmatched.push(t.joint.clone()),
+            }
+            joint_of_track.push(j);
+        }
+        driven.sort_unstable();
+        ClipBinding {
+            joint_of_track,
+            unmatched,
+            driven,
+            skeleton_len: skeleton.len(),
+        }
+    }
+    /// The clip's track names that matched no joint.
+    pub fn unmatched(&self) -> &[String] {
+        &self.unmatched
+    }
+    /// The skeleton joints this clip drives, ascending.
+    pub fn driven(&self) -> &[JointIndex] {
+        &self.driven
+    }
+    /// For each track of the clip, the joint it drives.
+    pub fn joint_of_track(&self) -> &[Option<JointIndex>] {
+        &self.joint_of_track
+    }
+}
+
+/// Per-character sampling state: a cursor into a clip's key times so that playing forward never searches
+/// from the first key.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Sampler {
+    cursor: usize,
+}
+
+impl Sampler {
+    /// A sampler at the first key.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Finds the key pair around `t` (already mapped by [`Clip::local_time`]) and the blend factor.
+    /// Returns `(k0, k1, alpha)`; `alpha == 0` means frame `k0` exactly.
+    #[inline]
+    pub fn locate(&mut self, clip: &Clip, t: f32) -> (usize, usize, f32) {
+        let times = &clip.times;
+        let n = times.len();
+        if n <= 1 || t <= times[0] {
+            self.cursor = 0;
+            if clip.looping && n > 1 && t < times[0] {
+                // Before the first key of a looping clip: coming from the last frame around the wrap.
+                let span = times[0] + (clip.duration - times[n - 1]);
+                if span > 0.0 {
+                    let a = (t + clip.duration - times[n - 1]) / span;
+                    return (n - 1, 0, a.clamp(0.0, 1.0));
+                }
+            }
+            return (0, 0, 0.0);
+        }
+        let mut c = self.cursor.min(n - 1);
+        if times[c] > t {
+            c = times.partition_point(|&x| x <= t) - 1;
+        } else {
+            let mut steps = 0;
+            while c + 1 < n && times[c + 1] <= t {
+                c += 1;
+                steps += 1;
+                if steps == 8 {
+                    c = times.partition_point(|&x| x <= t) - 1;
+                    break;
+                }
+            }
+        }
+        self.cursor = c;
+        if c + 1 >= n {
+            if clip.looping {
+                let span = clip.duration - times[c] + times[0];
+                if span > 0.0 {
+                    return (c, 0, ((t - times[c]) / span).clamp(0.0, 1.0));
+                }
+            }
+            return (c, c, 0.0);
+        }
+        let a = (t - times[c]) / (times[c + 1] - times[c]);
+        (c, c + 1, a)
+    }
+
+    /// Samples the clip at playback time `t` into `out` (one transform per skeleton joint), writing only
+    /// the joints the clip drives. Missing channels take the joint's bind value; for an additive clip they
+    /// take the identity difference.
+    pub fn sample(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        skeleton: &Skeleton,
+        t: f32,
+        out: &mut [Transform],
+    ) -> Result<(), ClipError> {
+        if out.len() != skeleton.len() {
+            return Err(ClipError::OutputLength {
+                expected: skeleton.len(),
+                got: out.len(),
+            });
+        }
+        if binding.joint_of_track.len() != clip.tracks.len()
+            || binding.skeleton_len != skeleton.len()
+        {
+            return Err(ClipError::BindingMismatch);
+        }
+        let t = clip.local_time(t);
+        let (k0, k1, a) = self.locate(clip, t);
+        let s = clip.stride;
+        let f0 = &clip.frames[k0 * s..(k0 + 1) * s];
+        let f1 = &clip.frames[k1 * s..(k1 + 1) * s];
+        let bind = skeleton.bind_local();
+        for (track, joint) in clip.tracks.iter().zip(&binding.joint_of_track) {
+            let Some(j) = *joint else { continue };
+            let j = j as usize;
+            let default = if clip.additive {
+                Transform::IDENTITY
+            } else {
+                bind[j]
+            };
+            let translation = match track.translation {
+                Channel::Bind => default.translation,
+                Channel::Constant(v) => v,
+                Channel::Animated(o) => lerp3(f0, f1, o as usize, a),
+            };
+            let rotation = match track.rotation {
+                Channel::Bind => default.rotation,
+                Channel::Constant(q) => q,
+                Channel::Animated(o) => {
+                    let o = o as usize;
+                    let q0 = Quat::from_xyzw(f0[o], f0[o + 1], f0[o + 2], f0[o + 3]);
+                    if a == 0.0 {
+                        q0
+                    } else {
+                        let q1 = Quat::from_xyzw(f1[o], f1[o + 1], f1[o + 2], f1[o + 3]);
+                        nlerp(q0, q1, a)
+                    }
+                }
+            };
+            let scale = match track.scale {
+                Channel::Bind => default.scale,
+                Channel::Constant(v) => v,
+                Channel::Animated(o) => lerp3(f0, f1, o as usize, a),
+            };
+            out[j] = Transform {
+                translation,
+                rotation,
+                scale,
+            };
+        }
+        Ok(())
+    }
+}
+
+#[inline]
+fn lerp3(f0: &[f32], f1: &[f32], o: usize, a: f32) -> Vec3 {
+    let v0 = Vec3::new(f0[o], f0[o + 1], f0[o + 2]);
+    if a == 0.0 {
+        v0
+    } else {
+        v0.lerp(Vec3::new(f1[o], f1[o + 1], f1[o + 2]), a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::skeleton::JointDesc;
+
+    fn skeleton() -> Skeleton {
+        Skeleton::from_unordered(vec![
+            JointDesc {
+                name: "root".into(),
+                parent: None,
+                bind_local: Transform::from_translation(Vec3::new(0.0, 1.0, 0.0)),
+                inverse_bind: None,
+            },
+            JointDesc {
+                name: "arm".into(),
+                parent: Some("root".into()),
+                bind_local: Transform::from_translation(Vec3::new(1.0, 0.0, 0.0)),
+                inverse_bind: None,
+            },
+        ])
+        .unwrap()
+        .0
+    }
+
+    fn walk(looping: bool) -> Clip {
+        // Root x goes 0, 1, 4 at times 0, 0.5, 1.0; the arm rotates 0 -> 90 degrees about z.
+        let duration = if looping { 1.5 } else { 1.0 };
+        Clip::from_curves(
+            "walk",
+            duration,
+            2.0,
+            looping,
+            false,
+            vec![
+                TrackCurves {
+                    joint: "root".into(),
+                    translation: Curve::new(
+                        vec![0.0, 0.5, 1.0],
+                        vec![Vec3::ZERO, Vec3::X, Vec3::X * 4.0],
+                    ),
+                    ..Default::default()
+                },
+                TrackCurves {
+                    joint: "arm".into(),
+                    rotation: Curve::new(
+                        vec![0.0, 1.0],
+                        vec![
+                            Quat::IDENTITY,
+                            Quat::from_rotation_z(std::f32::consts::FRAC_PI_2),
+                        ],
+                    ),
+                    scale: Curve::new(vec![0.0], vec![Vec3::splat(2.0)]),
+                    ..Default::default()
+                },
+                TrackCurves {
+                    joint: "tail".into(),
+                    translation: Curve::new(vec![0.0], vec![Vec3::ONE]),
+                    ..Default::default()
+                },
+            ],
+        )
+        .unwrap()
+    }
+
+    fn sample(clip: &Clip, t: f32) -> Vec<Transform> {
+        let s = skeleton();
+        let b = ClipBinding::new(clip, &s);
+        let mut out = vec![Transform::IDENTITY; s.len()];
+        Sampler::new().sample(clip, &b, &s, t, &mut out).unwrap();
+        out
+    }
+
+    #[test]
+    fn layout_is_union_of_key_times_and_constants_stored_once() {
+        let c = walk(false);
+        assert_eq!(c.times(), [0.0, 0.5, 1.0]);
+        // root translation (3) + arm rotation (4); the arm's scale is a constant.
+        assert_eq!(c.stride(), 7);
+        assert_eq!(c.tracks()[1].scale, Channel::Constant(Vec3::splat(2.0)));
+        assert_eq!(c.tracks()[0].rotation, Channel::Bind);
+        // The arm rotation at 0.5 (not one of its keys) was filled in by interpolation: 45 degrees.
+        let q = Quat::from_slice(&c.frames()[7 + 3..7 + 7]);
+        assert!(q.angle_between(Quat::from_rotation_z(std::f32::consts::FRAC_PI_4)) < 1e-5);
+    }
+
+    #[test]
+    fn samples_exact_at_keys_and_linear_between() {
+        let c = walk(false);
+        assert_eq!(sample(&c, 0.5)[0].translation, Vec3::X);
+        assert_eq!(sample(&c, 1.0)[0].translation, Vec3::X * 4.0);
+        let mid = sample(&c, 0.75)[0].translation;
+        assert!((mid - Vec3::X * 2.5).length() < 1e-6);
+        // Bind value fills the root's rotation and scale; the arm keeps its bind translation.
+        let p = sample(&c, 0.25);
+        assert_eq!(p[0].rotation, Quat::IDENTITY);
+        assert_eq!(p[1].translation, Vec3::X);
+        assert_eq!(p[1].scale, Vec3::splat(2.0));
+    }
+
+    #[test]
+    fn non_looping_clamps_before_zero_and_after_end() {
+        let c = walk(false);
+        assert_eq!(sample(&c, -3.0)[0].translation, Vec3::ZERO);
+        assert_eq!(sample(&c, 7.0)[0].translation, Vec3::X * 4.0);
+    }
+
+    #[test]
+    fn looping_wraps_and_interpolates_back_to_first_frame() {
+        let c = walk(true);
+        // Duration 1.5: from the last key (1.0, x=4) back to frame 0 (x=0) at 1.5.
+        let p = sample(&c, 1.25)[0].translation;
+        assert!((p - Vec3::X * 2.0).length() < 1e-6, "{p}");
+        // 2.0 wraps to 0.5.
+        assert_eq!(sample(&c, 2.0)[0].translation, Vec3::X);
+        // -0.25 wraps to 1.25.
+        let n = sample(&c, -0.25)[0].translation;
+        assert!((n - Vec3::X * 2.0).length() < 1e-6, "{n}");
+    }
+
+    #[test]
+    fn binding_lists_unmatched_names_and_leaves_other_joints_alone() {
+        let c = walk(false);
+        let s = skeleton();
+        let b = ClipBinding::new(&c, &s);
+        assert_eq!(b.unmatched(), ["tail"]);
+        assert_eq!(b.driven(), [0, 1]);
+        let partial = Clip::from_curves(
+            "arm only",
+            1.0,
+            1.0,
+            false,
+            false,
+            vec![TrackCurves {
+                joint: "arm".into(),
+                translation: Curve::new(vec![0.0], vec![Vec3::Y]),
+                ..Default::default()
+            }],
+        )
+        .unwrap();
+        let b = ClipBinding::new(&partial, &s);
+        let marker = Transform::from_translation(Vec3::splat(9.0));
+        let mut out = vec![marker; 2];
+        Sampler::new()
+            .sample(&partial, &b, &s, 0.3, &mut out)
+            .unwrap();
+        assert_eq!(out[0], marker);
+        assert_eq!(out[1].translation, Vec3::Y);
+    }
+
+    #[test]
+    fn cursor_moves_forward_and_recovers_on_jumps_back() {
+        let c = walk(false);
+        let mut s = Sampler::new();
+        assert_eq!(s.locate(&c, 0.1).0, 0);
+        assert_eq!(s.locate(&c, 0.6).0, 1);
+        assert_eq!(s.cursor, 1);
+        assert_eq!(s.locate(&c, 0.2).0, 0);
+        assert_eq!(s.locate(&c, 1.0), (2, 2, 0.0));
+    }
+
+    #[test]
+    fn rejects_bad_curves() {
+        let bad = |curve: Curve<Vec3>| {
+            Clip::from_curves(
+                "x",
+                1.0,
+                1.0,
+                false,
+                false,
+                vec![TrackCurves {
+                    joint: "a".into(),
+                    translation: curve,
+                    ..Default::default()
+                }],
+            )
+        };
+        assert!(matches!(
+            bad(Curve::new(vec![0.0, 0.0], vec![Vec3::ZERO, Vec3::X])),
+            Err(ClipError::BadTimes(_))
+        ));
+        assert!(matches!(
+            bad(Curve::new(vec![0.0], vec![Vec3::NAN])),
+            Err(ClipError::NonFinite(_))
+        ));
+        assert!(matches!(
+            bad(Curve::new(vec![0.0, 2.0], vec![Vec3::ZERO, Vec3::X])),
+            Err(ClipError::BadDuration(_))
+        ));
+        assert!(matches!(
+            bad(Curve::new(vec![0.0], vec![])),
+            Err(ClipError::LengthMismatch(_))
+        ));
+    }
+}

@@ -1,0 +1,25 @@
+//! sinew-core is the runtime a game links: skeletons, clip sampling, blending, local-to-model transforms,
+//! skinning, and the `.sinew` reader and writer.
+//!
+//! It does no file-system I/O and depends on nothing else of sinew's: bytes in, plain data out. The
+//! offline tools (importers, pipeline, command line) are built on top of it, and the baker calls the same
+//! skinning functions as a game, so a baked cache can be checked bit for bit against the runtime.
+//!
+//! The pieces, in the order a frame uses them:
+//! - [`Skeleton`]: joint names, parents (parents before children), bind pose, inverse bind matrices.
+//! - [`Clip`]: immutable key data shared by all characters; [`ClipBinding`] maps its tracks to joints by
+//!   name once; [`Sampler`] keeps a cursor per playing clip.
+//! - blending of weighted, masked and additive layers, and an animator holding per-character state;
+//! - local-to-model transforms, the skinning palette, and linear blend skinning of a [`Mesh`].
+
+pub mod clip;
+pub mod mesh;
+pub mod skeleton;
+pub mod transform;
+
+pub use clip::{Channel, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves};
+pub use mesh::{Lod, Mesh, Submesh, MAX_INFLUENCES};
+pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
+pub use transform::Transform;
+
+pub use glam;

@@ -1,0 +1,197 @@
+//! sinew-scene is the editable, in-memory asset model that importers produce and the pipeline consumes:
+//! a [`Scene`] holds one skeleton, meshes, materials and clips whose keys are stored per joint *name*.
+//!
+//! It sits between the importers (`sinew-import`, bytes to Scene) and the pipeline (`sinew-pipeline`:
+//! mapping, splitting, LODs, compression, compiling to `.sinew`, baking). Types that the runtime already
+//! defines ([`Skeleton`], [`Lod`], [`TrackCurves`]) are reused from `sinew-core` rather than copied.
+//!
+//! Conventions every importer follows:
+//! - Units and axes are the source's; nothing is rescaled or re-oriented on import.
+//! - Clip curves hold *absolute* local transforms (not differences from the bind pose), linearly
+//!   interpolated; importers turn step, cubic or Hermite source curves into linear keys themselves.
+//! - Mesh joint indices refer to the scene skeleton's joint order.
+//! - Every vertex of a mesh carries one normal and, when the source has them, one UV; vertices are split
+//!   where the source gives one position several normals or UVs, and `source_vertex` maps back.
+
+use sinew_core::{Lod, Skeleton, TrackCurves};
+
+pub use sinew_core;
+
+/// The file format a scene came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SourceFormat {
+    /// Milkshape 3D `.ms3d`.
+    Ms3d,
+    /// glTF 2.0 (`.gltf` or `.glb`).
+    Gltf,
+    /// Wavefront `.obj`.
+    Obj,
+    /// Biovision `.bvh`.
+    Bvh,
+    /// sinew's own `.sinew`.
+    Sinew,
+}
+
+impl SourceFormat {
+    /// Short lowercase name, as reports print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            SourceFormat::Ms3d => "ms3d",
+            SourceFormat::Gltf => "gltf",
+            SourceFormat::Obj => "obj",
+            SourceFormat::Bvh => "bvh",
+            SourceFormat::Sinew => "sinew",
+        }
+    }
+}
+
+/// How serious a diagnostic is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Level {
+    /// A decision or fact worth reporting (which convention was chosen, what was skipped on purpose).
+    Info,
+    /// Something was wrong or lossy but the import went on.
+    Warning,
+}
+
+/// A message an importer or pipeline step raised about the input.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    /// Severity.
+    pub level: Level,
+    /// Stable, kebab-case identifier scripts can match on (e.g. `ms3d-position-keys`).
+    pub code: String,
+    /// One human sentence.
+    pub message: String,
+    /// Named figures behind the message, in a fixed order (e.g. measurements behind a decision).
+    pub figures: Vec<(String, f64)>,
+}
+
+impl Diagnostic {
+    /// A warning without figures.
+    pub fn warning(code: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            level: Level::Warning,
+            code: code.into(),
+            message: message.into(),
+            figures: Vec::new(),
+        }
+    }
+    /// An informational note without figures.
+    pub fn info(code: impl Into<String>, message: impl Into<String>) -> Self {
+        Self {
+            level: Level::Info,
+            code: code.into(),
+            message: message.into(),
+            figures: Vec::new(),
+        }
+    }
+    /// Adds a named figure.
+    pub fn with_figure(mut self, name: impl Into<String>, value: f64) -> Self {
+        self.figures.push((name.into(), value));
+        self
+    }
+}
+
+/// A material, referenced by name from submeshes.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Material {
+    /// Unique name within the scene.
+    pub name: String,
+    /// Base colour RGBA, linear.
+    pub base_color: [f32; 4],
+    /// Path or URI of the colour texture as the source wrote it, if any.
+    pub texture: Option<String>,
+}
+
+/// A generated level of detail and what the simplifier reached.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GeneratedLod {
+    /// The simplified geometry.
+    pub lod: Lod,
+    /// Requested fraction of LOD 0's triangles.
+    pub target_ratio: f32,
+    /// Fraction of LOD 0's triangles actually kept.
+    pub reached_ratio: f32,
+    /// Simplifier error relative to the mesh extent.
+    pub error_relative: f32,
+    /// Simplifier error in model units.
+    pub error_model: f32,
+    /// True when the error limit stopped the simplifier before the target.
+    pub stopped_by_error_limit: bool,
+}
+
+/// A mesh: LOD 0 as imported, the map back to the source's vertices, and generated LODs.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mesh {
+    /// Mesh name (group, object or glTF mesh name).
+    pub name: String,
+    /// The imported geometry. `joints`/`weights` are empty for a static mesh.
+    pub geometry: Lod,
+    /// For each vertex of `geometry`, the index of the source file's vertex it came from.
+    pub source_vertex: Vec<u32>,
+    /// Number of vertices in the source file's own vertex list for this mesh.
+    pub source_vertex_count: u32,
+    /// Generated lower-detail versions, most detailed first.
+    pub lods: Vec<GeneratedLod>,
+}
+
+/// An animation clip as importers produce it: linear curves per joint name, absolute local transforms.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SceneClip {
+    /// Clip name (unique within a scene).
+    pub name: String,
+    /// Duration, seconds; at least the last key time.
+    pub duration: f32,
+    /// Nominal frames per second of the source.
+    pub sample_rate: f32,
+    /// Whether the clip loops.
+    pub looping: bool,
+    /// Whether the curves are differences from a reference pose.
+    pub additive: bool,
+    /// One entry per driven joint name.
+    pub tracks: Vec<TrackCurves>,
+}
+
+/// An imported asset: at most one skeleton, any number of meshes and clips.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The format the scene was read from.
+    pub source_format: SourceFormat,
+    /// The skeleton, if the source has one.
+    pub skeleton: Option<Skeleton>,
+    /// Meshes; joint indices refer to `skeleton`.
+    pub meshes: Vec<Mesh>,
+    /// Materials referenced by name from submeshes.
+    pub materials: Vec<Material>,
+    /// Clips; their tracks name joints, which need not all exist in `skeleton`.
+    pub clips: Vec<SceneClip>,
+    /// Everything the importer and later steps noticed.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl Scene {
+    /// An empty scene of the given source format.
+    pub fn new(source_format: SourceFormat) -> Self {
+        Self {
+            source_format,
+            skeleton: None,
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            clips: Vec::new(),
+            diagnostics: Vec::new(),
+        }
+    }
+
+    /// Diagnostics at warning level.
+    pub fn warnings(&self) -> impl Iterator<Item = &Diagnostic> {
+        self.diagnostics
+            .iter()
+            .filter(|d| d.level == Level::Warning)
+    }
+
+    /// The clip with this name.
+    pub fn clip(&self, name: &str) -> Option<&SceneClip> {
+        self.clips.iter().find(|c| c.name == name)
+    }
+}

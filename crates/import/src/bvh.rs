@@ -1,0 +1,18 @@
+//! Importer for the bvh format (being written).
+
+use crate::{ImportError, ImportOptions, Resolver};
+use sinew_scene::Scene;
+
+/// Imports a bvh file.
+pub fn import(
+    file_name: &str,
+    _bytes: &[u8],
+    _resolve: Resolver<'_>,
+    _options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    Err(ImportError::in_section(
+        file_name,
+        "file",
+        "bvh import is not implemented yet",
+    ))
+}

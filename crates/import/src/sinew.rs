@@ -1,0 +1,18 @@
+//! Importer for the sinew format (being written).
+
+use crate::{ImportError, ImportOptions, Resolver};
+use sinew_scene::Scene;
+
+/// Imports a sinew file.
+pub fn import(
+    file_name: &str,
+    _bytes: &[u8],
+    _resolve: Resolver<'_>,
+    _options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    Err(ImportError::in_section(
+        file_name,
+        "file",
+        "sinew import is not implemented yet",
+    ))
+}

@@ -1,5 +1,6 @@
 //! End-to-end tests of the conventions every command shares: help, usage errors, bad inputs and
 //! outputs, exit codes. They run the built binary as a subprocess.
+#![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
 mod common;
 

@@ -3,6 +3,7 @@
 //!
 //! Formats whose importer is not yet on the branch are `#[ignore]`d with the reason; the malformed
 //! files must fail cleanly whatever the state of the importers.
+#![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
 mod common;
 

@@ -1,5 +1,5 @@
 //! Helpers shared by the end-to-end tests: run the built `sinew` binary as a subprocess.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used)]
 
 use std::path::Path;
 use std::process::{Command, Output};

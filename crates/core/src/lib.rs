@@ -13,6 +13,7 @@
 //! - local-to-model transforms, the skinning palette, and linear blend skinning of a [`Mesh`].
 
 pub mod clip;
+pub mod format;
 pub mod mesh;
 pub mod skeleton;
 pub mod transform;

@@ -53,7 +53,8 @@ fn fix_checksums(b: &mut [u8]) {
 /// Byte ranges covered by a checksum: header, table, and every section.
 fn checked_ranges(bytes: &[u8]) -> Vec<std::ops::Range<usize>> {
     let count = u32_at(bytes, 32).unwrap() as usize;
-    let mut r = vec![0..48 + 32 * count];
+    let mut r = Vec::new();
+    r.push(0..48 + 32 * count);
     for s in format::sections(bytes).unwrap() {
         r.push(s.offset as usize..(s.offset + s.size) as usize);
     }

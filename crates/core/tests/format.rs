@@ -529,3 +529,49 @@ fn lod_info_defaults_are_written_for_missing_entries() {
     assert_eq!(back.lod_info[0][1].target_ratio, 1.0);
     assert_eq!(back.meshes, asset.meshes);
 }
+
+#[test]
+fn checksum_is_crc32_iso_hdlc_as_documented() {
+    // The standard check value of CRC-32/ISO-HDLC.
+    assert_eq!(crc32fast::hash(b"123456789"), 0xCBF4_3926);
+    let bytes = format::write(&full_asset()).unwrap();
+    let strs = &split(&bytes)[0].2;
+    assert_eq!(u32_at(&bytes, 48 + 24), crc32fast::hash(strs));
+}
+
+#[test]
+fn track_records_hold_kind_encoding_and_payload_as_documented() {
+    let bytes = format::write(&Asset {
+        clips: vec![walk()],
+        ..Default::default()
+    })
+    .unwrap();
+    let clip = &split(&bytes)[1].2;
+    assert_eq!(u32_at(clip, 0), 1);
+    assert_eq!(u32_at(clip, 4), 64);
+    assert_eq!(u32_at(clip, 16 + 4), 1); // looping
+    assert_eq!(&clip[16 + 8..16 + 12], &1.0f32.to_le_bytes());
+    assert_eq!(&clip[16 + 12..16 + 16], &30.0f32.to_le_bytes());
+    let stride = u32_at(clip, 16 + 20);
+    assert_eq!(stride, 7); // root translation (3) + spine rotation (4)
+    assert_eq!(u32_at(clip, 16 + 24), 4);
+    let tracks = 64;
+    // Track 0, root: translation animated at offset 0, rotation and scale bind.
+    assert_eq!(&clip[tracks + 4..tracks + 6], &[2, 0]);
+    assert_eq!(u32_at(clip, tracks + 8), 0);
+    assert_eq!(clip[tracks + 24], 0);
+    assert_eq!(clip[tracks + 44], 0);
+    // Track 1, spine: rotation animated at offset 3.
+    assert_eq!(clip[tracks + 64 + 24], 2);
+    assert_eq!(u32_at(clip, tracks + 64 + 28), 3);
+    // Track 2, head: constant translation (0, 0.25, 0) and constant scale 1.5.
+    let head = tracks + 128;
+    assert_eq!(clip[head + 4], 1);
+    assert_eq!(&clip[head + 12..head + 16], &0.25f32.to_le_bytes());
+    assert_eq!(clip[head + 44], 1);
+    assert_eq!(&clip[head + 48..head + 52], &1.5f32.to_le_bytes());
+    // Frames after the 4 track records: 3 keys x 7 floats; frame 1 starts with root x = 1.
+    let frames = tracks + 4 * 64;
+    assert_eq!(clip.len(), frames + 3 * 7 * 4);
+    assert_eq!(&clip[frames + 28..frames + 32], &1.0f32.to_le_bytes());
+}

@@ -15,6 +15,7 @@
 pub mod animator;
 pub mod blend;
 pub mod clip;
+pub mod format;
 pub mod mesh;
 pub mod skeleton;
 pub mod skinning;

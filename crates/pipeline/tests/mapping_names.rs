@@ -489,3 +489,37 @@ fn apply_mapping_renames_and_drops() {
     assert_eq!(out.tracks[1].translation.values[0].x, 2.0);
     assert_eq!((out.name.as_str(), out.looping), ("walk", true));
 }
+
+#[test]
+fn keyed_flags_come_from_varying_tracks() {
+    use sinew_core::glam::{Quat, Vec3};
+    use sinew_core::{JointDesc, Skeleton, Transform};
+    let joints = ["Hips", "LHipJoint", "LeftUpLeg", "LowerBack"]
+        .iter()
+        .enumerate()
+        .map(|(i, n)| JointDesc {
+            name: n.to_string(),
+            parent: (i > 0).then(|| "Hips".to_string()),
+            bind_local: Transform::IDENTITY,
+            inverse_bind: None,
+        })
+        .collect();
+    let (skeleton, _) = Skeleton::from_unordered(joints).unwrap();
+    let rot = |j: &str, a: f32| TrackCurves {
+        joint: j.into(),
+        rotation: Curve::new(
+            vec![0.0, 1.0],
+            vec![Quat::IDENTITY, Quat::from_rotation_x(a)],
+        ),
+        ..Default::default()
+    };
+    let mut hips = rot("Hips", 0.0);
+    hips.translation = Curve::new(vec![0.0, 1.0], vec![Vec3::ZERO, Vec3::Z]);
+    let clip = SceneClip {
+        name: "walk".into(),
+        tracks: vec![hips, rot("LHipJoint", 0.0), rot("LeftUpLeg", 0.3)],
+        ..Default::default()
+    };
+    let set = JointSet::from_skeleton_and_clips(&skeleton, &[clip]);
+    assert_eq!(set.keyed(), [true, false, true, false]);
+}

@@ -152,17 +152,38 @@ impl JointSet {
         self.names.iter().position(|n| n == name)
     }
 
-    fn depth(&self, i: usize) -> usize {
-        let mut d = 0;
-        let mut j = i;
-        while let Some(p) = self.parents.get(j).copied().flatten() {
-            d += 1;
-            j = p;
-            if d > self.names.len() {
-                break;
+    /// Depth of every joint (roots 0), in O(n): each chain is walked once.
+    fn depths(&self) -> Vec<usize> {
+        let n = self.names.len();
+        let mut depth: Vec<Option<usize>> = vec![None; n];
+        let mut path = Vec::new();
+        for i in 0..n {
+            let mut j = i;
+            // Walk up to a joint of known depth or a root (parents were made acyclic in `new`).
+            let base = loop {
+                if let Some(d) = depth[j] {
+                    break d + 1;
+                }
+                path.push(j);
+                match self.parents.get(j).copied().flatten() {
+                    Some(p) if path.len() <= n => j = p,
+                    _ => break 0,
+                }
+            };
+            for (k, &j) in path.iter().rev().enumerate() {
+                depth[j] = Some(base + k);
             }
+            path.clear();
         }
-        d
+        depth.into_iter().map(|d| d.unwrap_or(0)).collect()
+    }
+
+    fn index_by_name(&self) -> HashMap<&str, usize> {
+        let mut m = HashMap::with_capacity(self.names.len());
+        for (i, n) in self.names.iter().enumerate() {
+            m.entry(n.as_str()).or_insert(i);
+        }
+        m
     }
 }
 
@@ -714,10 +735,7 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
     let mut conflicts: Vec<(String, String)> = Vec::new();
 
     // Stage 1: exact.
-    let mut by_name: HashMap<&str, usize> = HashMap::new();
-    for (i, n) in motion.names.iter().enumerate() {
-        by_name.entry(n.as_str()).or_insert(i);
-    }
+    let by_name = motion.index_by_name();
     for (r, name) in rig.names.iter().enumerate() {
         if let Some(&m) = by_name.get(name.as_str()) {
             if used[m] {
@@ -765,6 +783,7 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
 
     // Stage 3: synonym slots, chains paired by order from the root.
     let chains = |set: &JointSet, slots: &[Option<Slot>], ctx: &SetContext| {
+        let depth = set.depths();
         let mut c: HashMap<(Slot, Side), Vec<usize>> = HashMap::new();
         for (i, s) in slots.iter().enumerate() {
             if let Some(s) = s {
@@ -772,7 +791,7 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
             }
         }
         for v in c.values_mut() {
-            v.sort_by_key(|&i| (set.depth(i), i));
+            v.sort_by_key(|&i| (depth[i], i));
         }
         c
     };
@@ -879,6 +898,13 @@ fn ambiguity_warnings(
     mslot: &[Option<Slot>],
 ) -> Vec<Diagnostic> {
     let mut out = Vec::new();
+    let motion_index = motion.index_by_name();
+    let mut rig_of_motion: Vec<Option<&str>> = vec![None; motion.names.len()];
+    for e in &mapping.entries {
+        if let Some(&m) = e.motion.as_deref().and_then(|m| motion_index.get(m)) {
+            rig_of_motion[m] = Some(e.rig.as_str());
+        }
+    }
     let describe = |names: &[String], ctx: &SetContext, slots: &[Option<Slot>], i: usize| {
         let slot = slots
             .get(i)
@@ -956,7 +982,7 @@ fn ambiguity_warnings(
     // Unkeyed helpers in the motion.
     let unkeyed: Vec<String> = (0..motion.names.len())
         .filter(|&i| !motion.keyed.get(i).copied().unwrap_or(true))
-        .map(|i| match mapping.rig_for(&motion.names[i]) {
+        .map(|i| match rig_of_motion[i] {
             Some(r) => format!("{} (bound to {r})", motion.names[i]),
             None => motion.names[i].clone(),
         })
@@ -1074,29 +1100,32 @@ pub fn read_mapping(
         .ok_or_else(|| shape("joints", "expected an object"))?;
     let mut bound: Vec<Option<usize>> = vec![None; rig.names.len()];
     let mut used: Vec<Option<usize>> = vec![None; motion.names.len()];
+    let rig_index = rig.index_by_name();
+    let motion_index = motion.index_by_name();
     for (key, val) in joints {
-        let r = rig.find(key).ok_or_else(|| MappingError::UnknownRigJoint {
-            name: key.clone(),
-            label: rig.label.clone(),
-        })?;
-        let m = match val {
-            serde_json::Value::Null => continue,
-            serde_json::Value::String(s) => {
-                motion
-                    .find(s)
-                    .ok_or_else(|| MappingError::UnknownMotionJoint {
+        let r = *rig_index
+            .get(key.as_str())
+            .ok_or_else(|| MappingError::UnknownRigJoint {
+                name: key.clone(),
+                label: rig.label.clone(),
+            })?;
+        let m =
+            match val {
+                serde_json::Value::Null => continue,
+                serde_json::Value::String(s) => *motion_index.get(s.as_str()).ok_or_else(|| {
+                    MappingError::UnknownMotionJoint {
                         name: s.clone(),
                         rig: key.clone(),
                         label: motion.label.clone(),
-                    })?
-            }
-            _ => {
-                return Err(shape(
-                    &format!("joints.{key:?}"),
-                    "expected a motion joint name or null",
-                ))
-            }
-        };
+                    }
+                })?,
+                _ => {
+                    return Err(shape(
+                        &format!("joints.{key:?}"),
+                        "expected a motion joint name or null",
+                    ))
+                }
+            };
         if let Some(prev) = used[m] {
             return Err(MappingError::DuplicateMotionJoint {
                 name: motion.names[m].clone(),
@@ -1169,16 +1198,17 @@ pub fn write_mapping(mapping: &Mapping) -> String {
 /// order, dropping tracks of unbound motion joints. Curves are copied unchanged (no retargeting: see
 /// [`crate::retarget`] when rest and bind poses differ).
 pub fn apply_mapping(clip: &SceneClip, mapping: &Mapping) -> SceneClip {
+    let mut by_joint: HashMap<&str, &TrackCurves> = HashMap::new();
+    for t in &clip.tracks {
+        by_joint.entry(t.joint.as_str()).or_insert(t);
+    }
     let tracks = mapping
         .pairs()
         .filter_map(|(r, m)| {
-            clip.tracks
-                .iter()
-                .find(|t| t.joint == m)
-                .map(|t| TrackCurves {
-                    joint: r.to_string(),
-                    ..t.clone()
-                })
+            by_joint.get(m).map(|t| TrackCurves {
+                joint: r.to_string(),
+                ..(*t).clone()
+            })
         })
         .collect();
     SceneClip {

@@ -714,6 +714,12 @@ pub fn fuzzy_score(a: &str, b: &str) -> f32 {
     1.0 - edit_distance(&a, &b) as f32 / longer as f32
 }
 
+/// True for every name that already occurred earlier in the list.
+fn repeated_names(names: &[String]) -> Vec<bool> {
+    let mut seen = HashSet::with_capacity(names.len());
+    names.iter().map(|n| !seen.insert(n.as_str())).collect()
+}
+
 fn compatible(a: Option<Slot>, b: Option<Slot>) -> bool {
     match (a, b) {
         (Some(a), Some(b)) => a == b,
@@ -731,14 +737,21 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
     let rslot: Vec<Option<Slot>> = (0..rig.names.len()).map(|i| rc.slot(i)).collect();
     let mslot: Vec<Option<Slot>> = (0..motion.names.len()).map(|i| mc.slot(i)).collect();
     let mut bound: Vec<Option<(usize, MatchMethod)>> = vec![None; rig.names.len()];
-    let mut used = vec![false; motion.names.len()];
+    // Mappings work by name: a repeated name (which no valid skeleton has) takes no part after its
+    // first occurrence, on either side.
+    let mut used = repeated_names(&motion.names);
+    for (r, rep) in repeated_names(&rig.names).into_iter().enumerate() {
+        if rep {
+            bound[r] = Some((usize::MAX, MatchMethod::Exact));
+        }
+    }
     let mut conflicts: Vec<(String, String)> = Vec::new();
 
     // Stage 1: exact.
     let by_name = motion.index_by_name();
     for (r, name) in rig.names.iter().enumerate() {
         if let Some(&m) = by_name.get(name.as_str()) {
-            if used[m] {
+            if used[m] || bound[r].is_some() {
                 continue;
             }
             if compatible(rslot[r], mslot[m]) {
@@ -848,6 +861,15 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
         }
     }
 
+    // Drop the placeholders of repeated rig names and list what stayed unmatched.
+    let bound: Vec<Option<(usize, MatchMethod)>> = bound
+        .into_iter()
+        .map(|b| b.filter(|&(m, _)| m < motion.names.len()))
+        .collect();
+    let mut matched = vec![false; motion.names.len()];
+    for &(m, _) in bound.iter().flatten() {
+        matched[m] = true;
+    }
     let entries = rig
         .names
         .iter()
@@ -867,7 +889,7 @@ pub fn map_joints(rig: &JointSet, motion: &JointSet) -> Mapping {
         motion_family: mc.family,
         entries,
         unmatched_motion: (0..motion.names.len())
-            .filter(|&m| !used[m])
+            .filter(|&m| !matched[m])
             .map(|m| motion.names[m].clone())
             .collect(),
         warnings: Vec::new(),

@@ -1261,6 +1261,26 @@ mod tests {
     }
 
     #[test]
+    fn match_method_serialises_and_displays() {
+        let m = MatchMethod::Synonym { slot: Slot::Thigh };
+        assert_eq!(
+            serde_json::to_string(&m).unwrap(),
+            r#"{"method":"synonym","slot":"thigh"}"#
+        );
+        assert_eq!(m.to_string(), "synonym (thigh)");
+        let f = MatchMethod::Fuzzy { score: 0.5 };
+        assert_eq!(
+            serde_json::to_string(&f).unwrap(),
+            r#"{"method":"fuzzy","score":0.5}"#
+        );
+        assert_eq!(f.to_string(), "fuzzy (0.50)");
+        assert_eq!(
+            serde_json::to_string(&MatchMethod::Exact).unwrap(),
+            r#"{"method":"exact"}"#
+        );
+    }
+
+    #[test]
     fn fuzzy_score_is_one_minus_relative_distance() {
         assert_eq!(fuzzy_score("forarm", "forearm"), 1.0 - 1.0 / 7.0);
         assert_eq!(fuzzy_score("abc", "abc"), 1.0);

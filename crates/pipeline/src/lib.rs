@@ -3,3 +3,6 @@
 //! format, baking vertex caches and verifying them against the runtime.
 
 pub mod compile;
+pub mod mapping;
+pub mod retarget;
+pub mod split;

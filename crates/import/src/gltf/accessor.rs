@@ -43,7 +43,11 @@ fn layout(t: DataType, d: Dimensions) -> (usize, usize, usize, usize) {
     };
     let col_bytes = rows * cs;
     // Matrix columns start on 4-byte boundaries (glTF 2.0 3.6.2.4).
-    let col_stride = if cols > 1 { col_bytes.div_ceil(4) * 4 } else { col_bytes };
+    let col_stride = if cols > 1 {
+        col_bytes.div_ceil(4) * 4
+    } else {
+        col_bytes
+    };
     (rows, cols, col_stride, col_stride * cols)
 }
 
@@ -275,7 +279,10 @@ pub fn read_f32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> ReadResult<Vec
     let e = elements(acc, buffers)?;
     let normalized = acc.normalized();
     let comps = e.comps();
-    let total = e.count.checked_mul(comps).ok_or("accessor size overflows")?;
+    let total = e
+        .count
+        .checked_mul(comps)
+        .ok_or("accessor size overflows")?;
     let mut out = Vec::with_capacity(total);
     match e.source {
         None => out.resize(total, 0.0),
@@ -307,11 +314,18 @@ pub fn read_u32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> ReadResult<Vec
         return Err(format!(
             "component type {:?}{} where an unsigned integer type is required",
             e.data_type,
-            if acc.normalized() { " (normalized)" } else { "" }
+            if acc.normalized() {
+                " (normalized)"
+            } else {
+                ""
+            }
         ));
     }
     let comps = e.comps();
-    let total = e.count.checked_mul(comps).ok_or("accessor size overflows")?;
+    let total = e
+        .count
+        .checked_mul(comps)
+        .ok_or("accessor size overflows")?;
     let mut out = Vec::with_capacity(total);
     match e.source {
         None => out.resize(total, 0),

@@ -8,12 +8,12 @@ use glam::{Quat, Vec3};
 use sinew_core::Curve;
 
 /// Largest angle (radians) by which a converted rotation curve may differ from glTF's between keys.
-pub const ROTATION_TOLERANCE: f32 = 1e-4;
+pub const ROTATION_TOLERANCE: f32 = 2e-6;
 /// Largest distance between a converted translation or scale curve and glTF's cubic spline between keys,
 /// relative to `max(1, largest absolute key value of the channel)`.
 pub const VECTOR_TOLERANCE: f32 = 1e-4;
 /// Most keys inserted into one glTF key interval.
-pub const MAX_SUBDIVISIONS: usize = 64;
+pub const MAX_SUBDIVISIONS: usize = 256;
 
 /// glTF interpolation of one sampler.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -120,12 +120,14 @@ pub fn vector_curve(times: &[f32], values: &[Vec3], interp: Interp) -> (Curve<Ve
                 }
                 Interp::Cubic => {
                     let td = t1 - t0;
-                    let (v0, b0, v1, a1) = (key(k - 1), values[3 * (k - 1) + 2], key(k), values[3 * k]);
+                    let (v0, b0, v1, a1) =
+                        (key(k - 1), values[3 * (k - 1) + 2], key(k), values[3 * k]);
                     let f = |s: f32| hermite(v0, b0, v1, a1, td, s);
                     let err_at = |pieces: usize| -> f32 {
                         let mut e = 0.0f32;
                         for p in 0..pieces {
-                            let (s0, s1) = (p as f32 / pieces as f32, (p + 1) as f32 / pieces as f32);
+                            let (s0, s1) =
+                                (p as f32 / pieces as f32, (p + 1) as f32 / pieces as f32);
                             let (y0, y1) = (f(s0), f(s1));
                             for q in 1..6 {
                                 let u = q as f32 / 6.0;

@@ -12,7 +12,7 @@ use crate::{ImportError, ImportOptions, Resolver};
 use accessor::{read_f32, read_u32};
 use anim::Interp;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3};
-use sinew_core::{Curve, JointDesc, Lod, Skeleton, Submesh, Transform, TrackCurves};
+use sinew_core::{Curve, JointDesc, Lod, Skeleton, Submesh, TrackCurves, Transform};
 use sinew_scene::{Diagnostic, Material, Mesh, Scene, SceneClip, SourceFormat};
 use std::collections::{BTreeMap, HashMap, HashSet};
 
@@ -29,22 +29,31 @@ fn split_glb<'a>(file: &str, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u
         Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
     };
     let err = |o: usize, m: String| ImportError::at_offset(file, "glb", o as u64, m);
-    let version = u32_at(4).ok_or_else(|| err(4, "file ends inside the 12-byte GLB header".into()))?;
+    let version =
+        u32_at(4).ok_or_else(|| err(4, "file ends inside the 12-byte GLB header".into()))?;
     if version != 2 {
-        return Err(err(4, format!("GLB version {version}; only version 2 is supported")));
+        return Err(err(
+            4,
+            format!("GLB version {version}; only version 2 is supported"),
+        ));
     }
-    let length = u32_at(8).ok_or_else(|| err(8, "file ends inside the GLB header".into()))? as usize;
+    let length =
+        u32_at(8).ok_or_else(|| err(8, "file ends inside the GLB header".into()))? as usize;
     if length > bytes.len() {
         return Err(err(
             8,
-            format!("header says the file is {length} bytes; only {} are present", bytes.len()),
+            format!(
+                "header says the file is {length} bytes; only {} are present",
+                bytes.len()
+            ),
         ));
     }
     let bytes = &bytes[..length];
     let mut chunks = Vec::new();
     let mut o = 12usize;
     while o < bytes.len() {
-        let len = u32_at(o).ok_or_else(|| err(o, "file ends inside a chunk header".into()))? as usize;
+        let len =
+            u32_at(o).ok_or_else(|| err(o, "file ends inside a chunk header".into()))? as usize;
         let ty = u32_at(o + 4).ok_or_else(|| err(o, "file ends inside a chunk header".into()))?;
         let start = o + 8;
         let end = start
@@ -67,7 +76,10 @@ fn split_glb<'a>(file: &str, bytes: &'a [u8]) -> Result<(&'a [u8], Option<&'a [u
         .next()
         .ok_or_else(|| err(12, "GLB has no chunks; the first must be JSON".into()))?;
     if ty != 0x4E4F_534A {
-        return Err(err(12, format!("first chunk has type 0x{ty:08x}; expected JSON")));
+        return Err(err(
+            12,
+            format!("first chunk has type 0x{ty:08x}; expected JSON"),
+        ));
     }
     let mut bin = None;
     for (off, ty, data) in it {
@@ -258,7 +270,11 @@ fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Loaded, Impor
         let data: Vec<u8> = match b.source() {
             gltf::buffer::Source::Bin => {
                 if b.index() != 0 {
-                    return Err(at(file, path, "only buffer 0 may refer to the GLB BIN chunk"));
+                    return Err(at(
+                        file,
+                        path,
+                        "only buffer 0 may refer to the GLB BIN chunk",
+                    ));
                 }
                 bin.ok_or_else(|| at(file, &path, "refers to the GLB BIN chunk, which is absent"))?
                     .to_vec()
@@ -272,7 +288,11 @@ fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Loaded, Impor
                         .ok_or_else(|| at(file, &path, "data URI holds invalid base64"))?
                 } else {
                     resolve(&percent_decode(uri)).map_err(|e| {
-                        at(file, &path, format!("cannot load external buffer {uri:?}: {e}"))
+                        at(
+                            file,
+                            &path,
+                            format!("cannot load external buffer {uri:?}: {e}"),
+                        )
                     })?
                 }
             }
@@ -323,7 +343,10 @@ fn floats(
         return Err(at(
             file,
             path,
-            format!("{a} has type {:?}; {comps} components expected", acc.dimensions()),
+            format!(
+                "{a} has type {:?}; {comps} components expected",
+                acc.dimensions()
+            ),
         ));
     }
     let v = read_f32(acc, &l.buffers).map_err(|m| at(file, &a, format!("{m} (used by {path})")))?;
@@ -353,7 +376,10 @@ fn uints(
         return Err(at(
             file,
             path,
-            format!("{a} has type {:?}; {comps} components expected", acc.dimensions()),
+            format!(
+                "{a} has type {:?}; {comps} components expected",
+                acc.dimensions()
+            ),
         ));
     }
     read_u32(acc, &l.buffers).map_err(|m| at(file, &a, format!("{m} (used by {path})")))
@@ -388,7 +414,11 @@ fn node_trs(node: &gltf::Node<'_>) -> (Transform, Option<(f32, bool)>) {
 fn decompose(m: Mat4) -> (Transform, f32, bool) {
     let negative = m.determinant() < 0.0;
     let (s, r, t) = m.to_scale_rotation_translation();
-    let r = if r.is_finite() { r.normalize() } else { Quat::IDENTITY };
+    let r = if r.is_finite() {
+        r.normalize()
+    } else {
+        Quat::IDENTITY
+    };
     let tr = Transform::new(t, r, s);
     let back = tr.to_mat4();
     let size = m.to_cols_array().iter().fold(1.0f32, |a, v| a.max(v.abs()));
@@ -398,7 +428,11 @@ fn decompose(m: Mat4) -> (Transform, f32, bool) {
         .zip(back.to_cols_array())
         .fold(0.0f32, |a, (x, y)| a.max((x - y).abs()))
         / size;
-    let residual = if residual.is_finite() { residual } else { f32::INFINITY };
+    let residual = if residual.is_finite() {
+        residual
+    } else {
+        f32::INFINITY
+    };
     (tr, residual, negative)
 }
 
@@ -467,7 +501,11 @@ fn node_names(doc: &gltf::Document) -> Vec<String> {
     base.iter()
         .enumerate()
         .map(|(i, b)| {
-            let mut name = if count[b] > 1 { format!("{b}#{i}") } else { b.clone() };
+            let mut name = if count[b] > 1 {
+                format!("{b}#{i}")
+            } else {
+                b.clone()
+            };
             while !used.insert(name.clone()) {
                 name.push('_');
             }
@@ -483,7 +521,11 @@ struct Graph {
     names: Vec<String>,
 }
 
-fn graph(file: &str, doc: &gltf::Document, diags: &mut Vec<Diagnostic>) -> Result<Graph, ImportError> {
+fn graph(
+    file: &str,
+    doc: &gltf::Document,
+    diags: &mut Vec<Diagnostic>,
+) -> Result<Graph, ImportError> {
     let parent = parents(file, doc)?;
     let mut local = Vec::new();
     for node in doc.nodes() {
@@ -538,7 +580,10 @@ fn graph(file: &str, doc: &gltf::Document, diags: &mut Vec<Diagnostic>) -> Resul
     Ok(Graph {
         parent,
         local,
-        world: world.into_iter().map(|m| m.unwrap_or(Mat4::IDENTITY)).collect(),
+        world: world
+            .into_iter()
+            .map(|m| m.unwrap_or(Mat4::IDENTITY))
+            .collect(),
         names: node_names(doc),
     })
 }
@@ -571,17 +616,16 @@ fn build_rig(
     let skin_path = skin.as_ref().map(|s| format!("skins[{}]", s.index()));
     let ibm: Option<Vec<f32>> = match skin.as_ref().and_then(|s| s.inverse_bind_matrices()) {
         Some(acc) => {
-            let p = format!("{}.inverseBindMatrices", skin_path.clone().unwrap_or_default());
+            let p = format!(
+                "{}.inverseBindMatrices",
+                skin_path.clone().unwrap_or_default()
+            );
             let v = floats(file, l, &acc, 16, &p)?;
             if v.len() < joints.len() * 16 {
                 return Err(at(
                     file,
                     p,
-                    format!(
-                        "{} matrices for {} joints",
-                        v.len() / 16,
-                        joints.len()
-                    ),
+                    format!("{} matrices for {} joints", v.len() / 16, joints.len()),
                 ));
             }
             Some(v)
@@ -710,7 +754,11 @@ pub fn import(
         }
         let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
         if joints.is_empty() {
-            return Err(at(file, format!("skins[{chosen}].joints"), "the skin has no joints"));
+            return Err(at(
+                file,
+                format!("skins[{chosen}].joints"),
+                "the skin has no joints",
+            ));
         }
         Some(build_rig(file, &l, &g, &joints, Some(skin))?)
     };
@@ -775,7 +823,9 @@ fn materials(doc: &gltf::Document) -> Vec<Material> {
 fn mesh_instances<'a>(doc: &'a gltf::Document, g: &Graph) -> Vec<(Option<usize>, gltf::Mesh<'a>)> {
     let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
         Some(s) => s.nodes().map(|n| n.index()).collect(),
-        None => (0..g.parent.len()).filter(|&i| g.parent[i].is_none()).collect(),
+        None => (0..g.parent.len())
+            .filter(|&i| g.parent[i].is_none())
+            .collect(),
     };
     let nodes: Vec<gltf::Node<'a>> = doc.nodes().collect();
     if nodes.is_empty() {
@@ -827,6 +877,7 @@ struct WeightStats {
     max_lost: f32,
     sum_lost: f64,
     zero_weight: usize,
+    unnormalised: usize,
 }
 
 #[allow(clippy::too_many_lines)]
@@ -878,7 +929,10 @@ fn import_meshes(
             let pp = format!("meshes[{mi}].primitives[{}]", prim.index());
             let mode = prim.mode();
             use gltf::mesh::Mode;
-            if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            if !matches!(
+                mode,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
                 scene.diagnostics.push(Diagnostic::warning(
                     "gltf-primitive-skipped",
                     format!("{pp} has mode {mode:?}; only triangles are imported"),
@@ -899,7 +953,11 @@ fn import_meshes(
                     return Err(at(
                         file,
                         format!("{pp}.attributes.{name}"),
-                        format!("accessors[{}] has {} elements; POSITION has {n}", acc.index(), acc.count()),
+                        format!(
+                            "accessors[{}] has {} elements; POSITION has {n}",
+                            acc.index(),
+                            acc.count()
+                        ),
                     ));
                 }
                 Ok(())
@@ -947,7 +1005,11 @@ fn import_meshes(
                     if whole != raw.len() {
                         scene.diagnostics.push(Diagnostic::warning(
                             "gltf-partial-triangle",
-                            format!("{pp} has {} indices, not a multiple of 3; the last {} dropped", raw.len(), raw.len() - whole),
+                            format!(
+                                "{pp} has {} indices, not a multiple of 3; the last {} dropped",
+                                raw.len(),
+                                raw.len() - whole
+                            ),
                         ));
                     }
                     raw[..whole].to_vec()
@@ -1011,7 +1073,9 @@ fn import_meshes(
                 if sets.is_empty() {
                     scene.diagnostics.push(Diagnostic::warning(
                         "gltf-primitive-skipped",
-                        format!("{pp} belongs to a skinned mesh but has no JOINTS_0/WEIGHTS_0; skipped"),
+                        format!(
+                            "{pp} belongs to a skinned mesh but has no JOINTS_0/WEIGHTS_0; skipped"
+                        ),
                     ));
                     continue;
                 }
@@ -1040,6 +1104,9 @@ fn import_meshes(
                         }
                     }
                     let total: f32 = list.iter().map(|e| e.1).sum();
+                    if total > 0.0 && (total - 1.0).abs() > 1e-3 {
+                        stats.unnormalised += 1;
+                    }
                     list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
                     let kept: f32 = list.iter().take(4).map(|e| e.1).sum();
                     let mut jj = [0u16; 4];
@@ -1151,11 +1218,26 @@ fn import_meshes(
             .with_figure("mean_lost", stats.sum_lost / stats.vertices_lost as f64),
         );
     }
+    if stats.unnormalised > 0 {
+        scene.diagnostics.push(
+            Diagnostic::warning(
+                "gltf-weights-renormalised",
+                format!(
+                    "{} vertices have weights that do not sum to 1 (off by more than 0.001); they were divided by their sum",
+                    stats.unnormalised
+                ),
+            )
+            .with_figure("vertices", stats.unnormalised as f64),
+        );
+    }
     if stats.zero_weight > 0 {
         scene.diagnostics.push(
             Diagnostic::warning(
                 "gltf-zero-weights",
-                format!("{} vertices have no weight; bound to the skin's first joint", stats.zero_weight),
+                format!(
+                    "{} vertices have no weight; bound to the skin's first joint",
+                    stats.zero_weight
+                ),
             )
             .with_figure("vertices", stats.zero_weight as f64),
         );
@@ -1235,14 +1317,23 @@ fn import_animations(
                     return Err(at(
                         file,
                         format!("{sp}.input"),
-                        format!("key times must increase: key {} at {} follows {}", k + 1, w[1], w[0]),
+                        format!(
+                            "key times must increase: key {} at {} follows {}",
+                            k + 1,
+                            w[1],
+                            w[0]
+                        ),
                     ));
                 }
                 intervals.push(w[1] - w[0]);
             }
             if let Some(&t0) = times.first() {
                 if t0 < 0.0 {
-                    return Err(at(file, format!("{sp}.input"), format!("negative key time {t0}")));
+                    return Err(at(
+                        file,
+                        format!("{sp}.input"),
+                        format!("negative key time {t0}"),
+                    ));
                 }
             }
             if let Some(&t) = times.last() {
@@ -1394,7 +1485,8 @@ fn bake_pre(track: &TrackCurves, pre: Mat4, rest: Transform) -> TrackCurves {
     };
     let mut prev: Option<Quat> = None;
     for &t in &times {
-        let tr = curve_at(&track.translation, t, |a, b, x| a.lerp(b, x)).unwrap_or(rest.translation);
+        let tr =
+            curve_at(&track.translation, t, |a, b, x| a.lerp(b, x)).unwrap_or(rest.translation);
         let r = curve_at(&track.rotation, t, anim::nlerp).unwrap_or(rest.rotation);
         let s = curve_at(&track.scale, t, |a, b, x| a.lerp(b, x)).unwrap_or(rest.scale);
         let (d, _, _) = decompose(pre * Transform::new(tr, r, s).to_mat4());

@@ -191,7 +191,15 @@ fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, ImportError> {
     parsed.map_err(|e| match e {
         gltf::Error::Deserialize(de) => {
             let off = offset_of(json, de.line(), de.column());
-            let path = json_path_at(json, off);
+            let mut path = json_path_at(json, off);
+            // serde notices a missing field at the end of its object, after the last key it read.
+            if de.to_string().starts_with("missing field") {
+                if let Some(dot) = path.rfind('.') {
+                    if !path[dot..].contains('[') {
+                        path.truncate(dot);
+                    }
+                }
+            }
             at(file, path, format!("{de}"))
         }
         gltf::Error::Validation(errors) => {
@@ -698,6 +706,26 @@ fn build_rig(
 
 /// Imports a glTF 2.0 file (`.gltf` or `.glb`). See docs/formats/gltf.md.
 pub fn import(
+    file_name: &str,
+    bytes: &[u8],
+    resolve: Resolver<'_>,
+    options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    // The gltf crate's typed accessors unwrap values its validation does not always cover; a panic
+    // there becomes an ordinary error instead of aborting a batch run.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_inner(file_name, bytes, resolve, options)
+    }))
+    .unwrap_or_else(|_| {
+        Err(ImportError::in_section(
+            file_name,
+            "json",
+            "the document holds a value the gltf crate could not interpret",
+        ))
+    })
+}
+
+fn import_inner(
     file_name: &str,
     bytes: &[u8],
     resolve: Resolver<'_>,

@@ -898,6 +898,9 @@ pub fn generate_normals(positions: &[Vec3], indices: &[u32]) -> (Vec<Vec3>, usiz
     (n, zero)
 }
 
+/// Joint indices and weights of a primitive's vertices.
+type Influences = (Vec<[u16; 4]>, Vec<[f32; 4]>);
+
 /// Statistics of the influence reduction.
 #[derive(Default)]
 struct WeightStats {
@@ -1074,7 +1077,7 @@ fn import_meshes(
                 }
                 None => None,
             };
-            let mut influences: Option<(Vec<[u16; 4]>, Vec<[f32; 4]>)> = None;
+            let mut influences: Option<Influences> = None;
             if skinned {
                 let Some(rig) = rig else { continue };
                 let mut sets: Vec<(Vec<u32>, Vec<f32>)> = Vec::new();

@@ -1,3 +1,7 @@
 //! sinew-pipeline is everything between import and output: joint-name mapping, partial-body splitting,
 //! LOD generation, keyframe reduction and quantization, compiling a Scene into the `.sinew` runtime
 //! format, baking vertex caches and verifying them against the runtime.
+
+pub mod cut;
+
+pub use cut::{cut_clips, CutError};

@@ -269,7 +269,7 @@ mod tests {
         let tr = &b.tracks[0].translation;
         assert_eq!(tr.values.first().unwrap().x, 7.0);
         assert_eq!(tr.values.last().unwrap().x, 11.0);
-        assert_eq!(tr.times.len(), 4); // 7, 9, 11 keys: 7 and 11 are the ends, 9 inside.
+        assert_eq!(tr.times.len(), 3); // keys at frames 7, 9, 11: 7 and 11 are the ends, 9 inside.
                                        // Rotation at frame 11 (the end) is the last key exactly.
         let r = &b.tracks[0].rotation;
         assert_eq!(

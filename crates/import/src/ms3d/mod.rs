@@ -280,9 +280,10 @@ fn build_mesh(
                     };
                     p[c] = Vec3::from_array(v.position);
                     if !p[c].is_finite() {
-                        return Err(ImportError::in_section(
+                        return Err(ImportError::at_offset(
                             file_name,
                             "vertices",
+                            (parse::HEADER_SIZE + 2 + vi as usize * parse::VERTEX_SIZE + 1) as u64,
                             format!("vertex {vi} has a non-finite position"),
                         ));
                     }

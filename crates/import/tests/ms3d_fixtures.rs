@@ -1,5 +1,6 @@
 //! MS3D fixtures written by the generator: every optional-block variant and both position-key
 //! conventions (issue 9).
+#![allow(clippy::unwrap_used)]
 
 use sinew_import::{ms3d, ImportOptions, PositionKeyRule};
 use sinew_scene::{Level, Scene};

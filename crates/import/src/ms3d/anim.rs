@@ -9,9 +9,9 @@ use sinew_core::{Curve, JointIndex, Skeleton, TrackCurves};
 use sinew_scene::{Diagnostic, SceneClip};
 
 /// Most Milkshape frames a clip is resampled at.
-const MAX_FRAMES: f64 = 1_000_000.0;
+const MAX_FRAMES: f64 = 1_048_576.0;
 /// Most (sample time x animated joint) values a clip may hold.
-const MAX_SAMPLES: usize = 1 << 24;
+const MAX_SAMPLES: usize = 1 << 22;
 /// Frame rate used when the file's is not a positive, finite number.
 const FALLBACK_FPS: f32 = 24.0;
 

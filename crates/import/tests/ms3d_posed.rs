@@ -157,11 +157,10 @@ fn a_posed_vertex_matches_the_hand_computation() {
             let jj = &js[c];
             let mut local = Mat4::from_translation(jj.pos) * Mat4::from_mat3(euler(jj.rot));
             if animated {
-                local = local
-                    * Mat4::from_rotation_translation(
-                        slerped(&jj.rk, t_file),
-                        hermite(&jj.pk, t_file),
-                    );
+                local *= Mat4::from_rotation_translation(
+                    slerped(&jj.rk, t_file),
+                    hermite(&jj.pk, t_file),
+                );
             }
             m *= local;
         }

@@ -251,7 +251,7 @@ fn test_simple_two_frames() {
     assert_eq!(sk.names(), ["Base", "End", "End_end"]);
     assert_eq!(sk.bind_local()[2].translation.to_array(), [0.0, 0.0, 30.0]);
     let c = &s.clips[0];
-    assert_eq!(c.tracks[1].rotation.times, [0.0, 0.033333333]);
+    assert_eq!(c.tracks[1].rotation.times, [0.0, 0.033_333_333_f64 as f32]);
     // Frame 1: all channels 1.0 -> root at (1, 1, 1), rotation Rz(1) Rx(1) Ry(1).
     assert_eq!(
         c.tracks[0].translation.values[1].to_array(),

@@ -531,3 +531,36 @@ fn bad_numbers_and_indices_name_the_line() {
     let e = import_str("v 1e39 0 0\n", None).unwrap_err();
     assert_eq!(line_of(&e), 1);
 }
+
+#[test]
+fn fixture_prop() {
+    let path = sinew_testdata::fixtures().join("prop.obj");
+    let s = sinew_import::import_path(&path, &ImportOptions::default()).unwrap();
+    check_invariants(&s);
+    assert_eq!(s.warnings().count(), 0, "{:?}", s.diagnostics);
+    let names: Vec<&str> = s.meshes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["crate", "lid"]);
+    let crate_ = &s.meshes[0].geometry;
+    assert_eq!(crate_.triangle_count(), 12);
+    // `s off`: every quad has its own 4 vertices with the face's outward axis normal.
+    assert_eq!(crate_.vertex_count(), 24);
+    for (p, n) in crate_.positions.iter().zip(&crate_.normals) {
+        let c = *p - sinew_core::glam::Vec3::splat(0.5);
+        assert!((c.dot(*n) - 0.5).abs() < 1e-6, "{p} {n}");
+    }
+    assert_eq!(crate_.submeshes[0].material, "wood");
+    let lid = &s.meshes[1];
+    assert_eq!(lid.geometry.triangle_count(), 4);
+    assert_eq!(lid.source_vertex, [8, 9, 10, 11, 12, 13]);
+    assert!(lid
+        .geometry
+        .normals
+        .iter()
+        .all(|n| n.to_array() == [0.0, 1.0, 0.0]));
+    assert!(lid.geometry.uvs.is_empty());
+    let wood = s.materials.iter().find(|m| m.name == "wood").unwrap();
+    assert_eq!(wood.base_color, [0.6, 0.4, 0.2, 1.0]);
+    assert_eq!(wood.texture.as_deref(), Some("wood.png"));
+    let metal = s.materials.iter().find(|m| m.name == "metal").unwrap();
+    assert_eq!(metal.base_color, [0.7, 0.7, 0.75, 0.5]);
+}

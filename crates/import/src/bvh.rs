@@ -128,6 +128,7 @@ pub fn import(
     }
 
     let mut joints: Vec<RawJoint> = Vec::new();
+    let mut names: std::collections::HashSet<String> = std::collections::HashSet::new();
     // Stack of open nodes (indices into `joints`).
     let mut stack: Vec<usize> = Vec::new();
     // A ROOT/JOINT/End Site line seen, waiting for its `{`.
@@ -176,7 +177,7 @@ pub fn import(
                         return Err(err(f, "HIERARCHY", n, "JOINT inside an End Site"));
                     }
                 }
-                if joints.iter().any(|j| j.name == name) {
+                if !names.insert(name.to_string()) {
                     return Err(err(
                         f,
                         "HIERARCHY",
@@ -223,10 +224,11 @@ pub fn import(
                 let base = format!("{}_end", p.name);
                 let mut name = base.clone();
                 let mut k = 2;
-                while joints.iter().any(|j| j.name == name) {
+                while names.contains(&name) {
                     name = format!("{base}{k}");
                     k += 1;
                 }
+                names.insert(name.clone());
                 joints.push(RawJoint {
                     name,
                     parent: Some(parent),
@@ -477,7 +479,13 @@ pub fn import(
             .with_figure("ignored_lines", (data_lines.len() - frames) as f64),
         );
     }
-    let mut values: Vec<f64> = Vec::with_capacity(frames.saturating_mul(total_channels));
+    // Each value takes at least two bytes (a digit and a separator), which caps the reservation by the
+    // bytes present even when the lines turn out to hold too few values.
+    let mut values: Vec<f64> = Vec::with_capacity(
+        frames
+            .saturating_mul(total_channels)
+            .min(text.len() / 2 + 1),
+    );
     for (k, (n, l)) in data_lines.iter().take(frames).enumerate() {
         let before = values.len();
         for tok in l.split_ascii_whitespace() {

@@ -433,8 +433,10 @@ pub fn import(
         );
     }
     let mut missing_materials = Vec::new();
+    let defined: std::collections::HashSet<String> =
+        materials.iter().map(|m| m.name.clone()).collect();
     for name in material_names.iter().skip(1) {
-        if !materials.iter().any(|m| &m.name == name) {
+        if !defined.contains(name) {
             missing_materials.push(name.clone());
             materials.push(Material {
                 name: name.clone(),
@@ -755,6 +757,11 @@ fn load_mtllib(
 /// are skipped with a warning naming the line.
 fn parse_mtl(name: &str, bytes: &[u8], materials: &mut Vec<Material>, diags: &mut Vec<Diagnostic>) {
     let text = decode_text(bytes);
+    let mut index: HashMap<String, usize> = materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| (m.name.clone(), i))
+        .collect();
     let mut current: Option<usize> = None;
     let mut bad_lines: Vec<usize> = Vec::new();
     for (n, raw) in numbered_lines(&text) {
@@ -778,10 +785,10 @@ fn parse_mtl(name: &str, bytes: &[u8], materials: &mut Vec<Material>, diags: &mu
                     current = None;
                     continue;
                 }
-                let existing = materials.iter().position(|m| m.name == rest);
-                current = Some(match existing {
-                    Some(i) => i,
+                current = Some(match index.get(rest) {
+                    Some(&i) => i,
                     None => {
+                        index.insert(rest.to_string(), materials.len());
                         materials.push(Material {
                             name: rest.to_string(),
                             base_color: [1.0, 1.0, 1.0, 1.0],

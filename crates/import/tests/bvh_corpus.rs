@@ -344,3 +344,25 @@ fn huge_frame_count_is_checked_before_allocating() {
     let e = import_bytes("m.bvh", text.as_bytes()).unwrap_err();
     assert!(e.message.contains("only 2 frame lines"), "{e}");
 }
+
+#[test]
+fn many_channels_times_many_short_lines_is_an_error_not_an_allocation() {
+    // 1000 joints x 60 channels declared, then many one-value lines: the reservation must be capped by
+    // the bytes present, and the first short line is the error.
+    let mut text = String::from("HIERARCHY\nROOT r\n{\nOFFSET 0 0 0\nCHANNELS 60");
+    for _ in 0..10 {
+        text.push_str(" Xrotation Yrotation Zrotation Xposition Yposition Zposition");
+    }
+    text.push('\n');
+    for i in 0..999 {
+        text.push_str(&format!(
+            "JOINT j{i}\n{{\nOFFSET 0 0 0\nCHANNELS 3 Xrotation Yrotation Zrotation\n}}\n"
+        ));
+    }
+    text.push_str("}\nMOTION\nFrames: 100000\nFrame Time: 0.1\n");
+    let header_lines = text.lines().count();
+    text.push_str(&"1\n".repeat(100_000));
+    let e = import_bytes("m.bvh", text.as_bytes()).unwrap_err();
+    assert_eq!(line_of(&e), header_lines + 1, "{e}");
+    assert!(e.message.contains("has 1 values, expected 3057"), "{e}");
+}

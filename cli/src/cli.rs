@@ -9,7 +9,7 @@ use std::path::PathBuf;
     name = "sinew",
     version,
     about = "Convert, inspect and check skeletal animation assets (MS3D, glTF, OBJ, BVH, .sinew)",
-    after_help = "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect walk.bvh --json > walk.json\n\nExit codes: 0 success, 1 a check or one of several files failed, 2 bad input or usage.\nSee docs/cli.md."
+    after_help = "Examples:\n  sinew convert zombie.ms3d -o zombie.sinew\n  sinew convert models/*.glb --out-dir out/ --json > report.json\n  sinew inspect fixtures/biped.sinew\n  sinew map scientist.ms3d walk.bvh --write map.json\n\nExit codes: 0 success, 1 a check or one of several files failed, 2 bad input or usage.\nSee docs/cli.md."
 )]
 pub struct Cli {
     /// Options every command accepts.
@@ -39,6 +39,26 @@ pub enum Command {
         after_help = "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect zombie.ms3d --ms3d-position-keys viewer\n  sinew inspect Fox.glb --json | jq '.clips[].name'"
     )]
     Inspect(InspectArgs),
+    /// Convert models and motions to .sinew (one file, or many in parallel with --out-dir).
+    #[command(
+        after_help = "Examples:\n  sinew convert zombie.ms3d -o zombie.sinew\n  sinew convert scientist.ms3d --anim walk.bvh --retarget --at \"Bip01 Spine\" -o scientist.sinew\n  sinew convert scientist.ms3d --clips idle=1-30,walk=31-60 --lod 0.5,0.25 -o scientist.sinew\n  sinew convert models/*.glb models/*.ms3d --out-dir out/ --jobs 4 --json > report.json\n\nExit codes: 0 all converted, 1 some files of a batch failed (all are listed), 2 bad input or usage."
+    )]
+    Convert(ConvertArgs),
+    /// Show how a motion's joints bind to a rig's joints, and save the mapping.
+    #[command(
+        after_help = "Examples:\n  sinew map fixtures/biped.sinew walk.bvh\n  sinew map scientist.ms3d walk.bvh --write map.json\n  sinew map scientist.ms3d walk.bvh --map map.json --json"
+    )]
+    Map(MapArgs),
+    /// Split every clip into partial-body clips (upper/lower at joints, or named joint masks).
+    #[command(
+        after_help = "Examples:\n  sinew split scientist.sinew --at \"Bip01 Spine\" -o scientist_split.sinew\n  sinew split biped.sinew --mask \"arms=Bip01 L UpperArm,Bip01 R UpperArm\" -o out.sinew"
+    )]
+    Split(SplitArgs),
+    /// Regenerate the LODs of a .sinew file.
+    #[command(
+        after_help = "Examples:\n  sinew lod scientist.sinew -o scientist.sinew --lod 0.6,0.3\n  sinew lod scientist.sinew -o scientist_nolod.sinew --lod none"
+    )]
+    Lod(LodCmdArgs),
     /// Print a shell completion script on stdout.
     #[command(
         after_help = "Examples:\n  sinew completions bash > ~/.local/share/bash-completion/completions/sinew\n  sinew completions zsh > ~/.zfunc/_sinew"
@@ -83,4 +103,117 @@ pub struct InspectArgs {
 pub struct CompletionsArgs {
     /// The shell to write a completion script for.
     pub shell: clap_complete::Shell,
+}
+
+/// LOD options shared by `convert` and `lod`.
+#[derive(Debug, Args, Clone)]
+pub struct LodArgs {
+    /// LOD ratios of LOD 0's triangles, decreasing (`0.5,0.25`), or `none` for no LODs.
+    #[arg(long, value_name = "R1,R2|none", default_value = "0.5,0.25")]
+    pub lod: String,
+    /// Largest simplification error, relative to the mesh extent.
+    #[arg(long, value_name = "E", default_value_t = sinew_pipeline::lod::DEFAULT_MAX_ERROR)]
+    pub lod_max_error: f32,
+    /// Influences per vertex kept in the lowest LOD (1 to 4).
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    pub lod_influences: usize,
+}
+
+/// Partial-body options shared by `convert` and `split`.
+#[derive(Debug, Args, Clone, Default)]
+pub struct SplitOpts {
+    /// Split every clip into CLIP.upper (subtrees under JOINT) and CLIP.lower (repeatable).
+    #[arg(long = "at", visible_alias = "split", value_name = "JOINT")]
+    pub at: Vec<String>,
+    /// Add CLIP.NAME holding only the tracks of the listed joints (repeatable).
+    #[arg(long, value_name = "NAME=JOINT,...")]
+    pub mask: Vec<String>,
+}
+
+/// `sinew convert`.
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// Input files (.ms3d, .gltf, .glb, .obj, .bvh, .sinew).
+    #[arg(required = true, value_name = "INPUT")]
+    pub inputs: Vec<PathBuf>,
+    /// Output file (exactly one input).
+    #[arg(short, long, value_name = "OUT.sinew", conflicts_with = "out_dir")]
+    pub output: Option<PathBuf>,
+    /// Output directory: each input becomes DIR/<stem>.sinew (batch mode).
+    #[arg(long, value_name = "DIR")]
+    pub out_dir: Option<PathBuf>,
+    /// Worker threads for batch mode (default: all cores).
+    #[arg(long, short = 'j', value_name = "N")]
+    pub jobs: Option<usize>,
+    /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
+    #[arg(long, value_name = "FILE")]
+    pub anim: Vec<PathBuf>,
+    /// Mapping file (from `sinew map --write`) used for every --anim instead of automatic matching.
+    #[arg(long, value_name = "map.json")]
+    pub map: Option<PathBuf>,
+    /// Retarget --anim motion: transfer rotations as changes from the motion's rest pose.
+    #[arg(long)]
+    pub retarget: bool,
+    /// Cut the model's single timeline into named clips by frame (`walk=1-30,run=31-50`).
+    #[arg(long, value_name = "NAME=A-B,...")]
+    pub clips: Option<String>,
+    /// Partial-body clips.
+    #[command(flatten)]
+    pub split: SplitOpts,
+    /// LOD generation.
+    #[command(flatten)]
+    pub lod: LodArgs,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew map`.
+#[derive(Debug, Args)]
+pub struct MapArgs {
+    /// The rig: the model whose skeleton the motion should drive.
+    pub rig: PathBuf,
+    /// The motion file (BVH, glTF, MS3D, .sinew).
+    pub motion: PathBuf,
+    /// Check and show this mapping file instead of matching automatically.
+    #[arg(long, value_name = "map.json")]
+    pub map: Option<PathBuf>,
+    /// Save the mapping as a file for `convert --map` (edit it freely).
+    #[arg(long, value_name = "map.json")]
+    pub write: Option<PathBuf>,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew split`.
+#[derive(Debug, Args)]
+pub struct SplitArgs {
+    /// The file whose clips are split (any supported input; usually .sinew).
+    pub file: PathBuf,
+    /// Output .sinew file.
+    #[arg(short, long, value_name = "OUT.sinew")]
+    pub output: PathBuf,
+    /// Where to split.
+    #[command(flatten)]
+    pub split: SplitOpts,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew lod`.
+#[derive(Debug, Args)]
+pub struct LodCmdArgs {
+    /// The file whose LODs are regenerated (usually .sinew).
+    pub file: PathBuf,
+    /// Output .sinew file (may be the input itself).
+    #[arg(short, long, value_name = "OUT.sinew")]
+    pub output: PathBuf,
+    /// LOD options.
+    #[command(flatten)]
+    pub lod: LodArgs,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
 }

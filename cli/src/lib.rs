@@ -14,6 +14,7 @@ pub mod cli;
 pub mod commands;
 pub mod input;
 pub mod output;
+pub mod steps;
 
 use clap::Parser;
 use std::process::ExitCode;

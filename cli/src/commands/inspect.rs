@@ -244,7 +244,7 @@ pub struct MaterialReport {
 }
 
 /// A diagnostic.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Clone, Serialize)]
 pub struct DiagnosticReport {
     /// `info` or `warning`.
     pub level: &'static str,
@@ -257,7 +257,7 @@ pub struct DiagnosticReport {
 }
 
 /// A named figure behind a diagnostic.
-#[derive(Debug, Serialize)]
+#[derive(Debug, Clone, Serialize)]
 pub struct Figure {
     /// Figure name.
     pub name: String,
@@ -355,7 +355,7 @@ fn skeleton_report(s: &Skeleton) -> SkeletonReport {
     }
 }
 
-fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> ClipReport {
+pub(crate) fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> ClipReport {
     let mut keys = KeyCounts::default();
     let mut times: Vec<f32> = Vec::new();
     let mut tracks = Vec::with_capacity(c.tracks.len());
@@ -431,7 +431,7 @@ fn bounds(positions: &[Vec3]) -> Option<Bounds> {
     })
 }
 
-fn mesh_report(m: &sinew_scene::Mesh) -> MeshReport {
+pub(crate) fn mesh_report(m: &sinew_scene::Mesh) -> MeshReport {
     let g = &m.geometry;
     let n = g.positions.len();
     MeshReport {
@@ -479,7 +479,7 @@ fn level_name(level: Level) -> &'static str {
     }
 }
 
-fn diag_report(d: &Diagnostic) -> DiagnosticReport {
+pub(crate) fn diag_report(d: &Diagnostic) -> DiagnosticReport {
     DiagnosticReport {
         level: level_name(d.level),
         code: d.code.clone(),
@@ -496,7 +496,7 @@ fn diag_report(d: &Diagnostic) -> DiagnosticReport {
 }
 
 /// A number with at most 4 decimals, trailing zeros dropped, and no `-0`.
-fn num(x: f32) -> String {
+pub(crate) fn num(x: f32) -> String {
     let s = format!("{x:.4}");
     let s = if s.contains('.') {
         s.trim_end_matches('0').trim_end_matches('.').to_string()
@@ -510,7 +510,7 @@ fn num(x: f32) -> String {
     }
 }
 
-fn nums(v: &[f32]) -> String {
+pub(crate) fn nums(v: &[f32]) -> String {
     v.iter().map(|&x| num(x)).collect::<Vec<_>>().join(", ")
 }
 

@@ -1,7 +1,11 @@
 //! One module per subcommand; [`run`] dispatches.
 
 pub mod completions;
+pub mod convert;
 pub mod inspect;
+pub mod lod;
+pub mod map;
+pub mod split;
 
 use crate::cli::Command;
 use crate::output::Ctx;
@@ -12,5 +16,9 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
     match command {
         Command::Inspect(args) => inspect::run(&args, ctx),
         Command::Completions(args) => completions::run(&args),
+        Command::Convert(args) => convert::run(&args, ctx),
+        Command::Map(args) => map::run(&args, ctx),
+        Command::Split(args) => split::run(&args, ctx),
+        Command::Lod(args) => lod::run(&args, ctx),
     }
 }

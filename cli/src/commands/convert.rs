@@ -1,0 +1,476 @@
+//! `sinew convert INPUT... (-o OUT | --out-dir DIR)`: import, bind motions, cut, split, LODs, compile,
+//! write atomically. Several inputs run in parallel (rayon); one bad file does not stop the others.
+//!
+//! The JSON report is [`ConvertReport`]; the per-output part, [`OutputDetails`], is shared with `split`
+//! and `lod`. Field names are a stable interface documented in docs/cli.md.
+
+use crate::cli::ConvertArgs;
+use crate::commands::inspect::{
+    clip_report, diag_report, mesh_report, num, DiagnosticReport, KeyCounts, LodReport,
+};
+use crate::output::{check_output_path, print_json, write_atomic, Ctx};
+use crate::steps::{self, MappingFile, MotionReport, SplitPlan, SplitReport};
+use crate::Status;
+use anyhow::{anyhow, bail};
+use rayon::prelude::*;
+use serde::Serialize;
+use sinew_pipeline::lod::LodOptions;
+use sinew_scene::Scene;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+/// The whole report of `sinew convert --json`.
+#[derive(Debug, Serialize)]
+pub struct ConvertReport {
+    /// Inputs given.
+    pub inputs: usize,
+    /// Outputs written.
+    pub converted: usize,
+    /// Inputs that failed.
+    pub failed: usize,
+    /// One entry per input, in command-line order.
+    pub files: Vec<FileReport>,
+}
+
+/// One input of a convert run.
+#[derive(Debug, Serialize)]
+pub struct FileReport {
+    /// The input path as given.
+    pub input: String,
+    /// The output path.
+    pub output: String,
+    /// `converted` or `failed`.
+    pub status: &'static str,
+    /// The error (one line) when failed, else `null`.
+    pub error: Option<String>,
+    /// What was written (absent when failed).
+    #[serde(flatten)]
+    pub details: Option<OutputDetails>,
+}
+
+/// What one written `.sinew` holds and how it was made.
+#[derive(Debug, Serialize)]
+pub struct OutputDetails {
+    /// Size of the written file, bytes.
+    pub bytes: u64,
+    /// Source format of the input.
+    pub format: &'static str,
+    /// Joints in the skeleton (0 without one).
+    pub joints: usize,
+    /// Meshes with their LODs.
+    pub meshes: Vec<MeshOut>,
+    /// Clips as written.
+    pub clips: Vec<ClipOut>,
+    /// One entry per `--anim` file.
+    pub motions: Vec<MotionReport>,
+    /// Clips made by `--clips` (empty without it).
+    pub cuts: Vec<String>,
+    /// What `--at`/`--mask` did to each clip (empty without them).
+    pub splits: Vec<SplitReport>,
+    /// Every diagnostic raised on the way: importer, mapping, retargeting.
+    pub diagnostics: Vec<DiagnosticReport>,
+}
+
+/// One mesh of the output.
+#[derive(Debug, Serialize)]
+pub struct MeshOut {
+    /// Mesh name.
+    pub name: String,
+    /// Vertices of LOD 0.
+    pub vertices: usize,
+    /// Triangles of LOD 0.
+    pub triangles: usize,
+    /// Generated LODs, most detailed first (same fields as `inspect`).
+    pub lods: Vec<LodReport>,
+}
+
+/// One clip of the output.
+#[derive(Debug, Serialize)]
+pub struct ClipOut {
+    /// Clip name.
+    pub name: String,
+    /// Duration, seconds.
+    pub duration: f32,
+    /// Nominal frames per second.
+    pub sample_rate: f32,
+    /// Distinct key times.
+    pub key_times: usize,
+    /// Key counts.
+    pub keys: KeyCounts,
+    /// Number of joints the clip drives.
+    pub driven_joints: usize,
+}
+
+/// Builds the details of an output from the final scene.
+pub fn details(
+    scene: &Scene,
+    bytes: u64,
+    motions: Vec<MotionReport>,
+    cuts: Vec<String>,
+    splits: Vec<SplitReport>,
+) -> OutputDetails {
+    OutputDetails {
+        bytes,
+        format: scene.source_format.name(),
+        joints: scene.skeleton.as_ref().map_or(0, |s| s.len()),
+        meshes: scene
+            .meshes
+            .iter()
+            .map(|m| {
+                let r = mesh_report(m);
+                MeshOut {
+                    name: r.name,
+                    vertices: r.vertices,
+                    triangles: r.triangles,
+                    lods: r.lods,
+                }
+            })
+            .collect(),
+        clips: scene
+            .clips
+            .iter()
+            .map(|c| {
+                let r = clip_report(c, scene.skeleton.as_ref());
+                ClipOut {
+                    name: r.name,
+                    duration: r.duration,
+                    sample_rate: r.sample_rate,
+                    key_times: r.key_times,
+                    keys: r.keys,
+                    driven_joints: r.driven_joints.len(),
+                }
+            })
+            .collect(),
+        motions,
+        cuts,
+        splits,
+        diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
+    }
+}
+
+/// Compiles a scene and writes it atomically; returns the byte count.
+pub fn write_scene(scene: &Scene, input: &str, output: &Path) -> anyhow::Result<u64> {
+    let bytes = sinew_pipeline::compile::compile_to_bytes(scene)
+        .map_err(|e| anyhow!("{input}: compiling: {e}"))?;
+    write_atomic(output, &bytes)?;
+    Ok(bytes.len() as u64)
+}
+
+/// Everything prepared once for all inputs.
+struct Plan {
+    import: crate::cli::ImportArgs,
+    anims: Vec<(String, Scene)>,
+    map: Option<MappingFile>,
+    retarget: bool,
+    clips: Option<String>,
+    split: SplitPlan,
+    lod: Option<LodOptions>,
+}
+
+fn convert_one(input: &Path, output: &Path, plan: &Plan) -> anyhow::Result<OutputDetails> {
+    let label = input.display().to_string();
+    let mut scene = crate::input::import(input, &plan.import)?;
+    let cuts = match &plan.clips {
+        Some(spec) => steps::cut(&mut scene, spec, &label)?,
+        None => Vec::new(),
+    };
+    let mut motions = Vec::new();
+    for (motion_label, motion) in &plan.anims {
+        motions.push(steps::bind_motion(
+            &mut scene,
+            &label,
+            motion,
+            motion_label,
+            plan.map.as_ref(),
+            plan.retarget,
+        )?);
+    }
+    let splits = steps::split(&mut scene, &plan.split, &label)?;
+    steps::lods(&mut scene, plan.lod.as_ref(), &label)?;
+    let bytes = write_scene(&scene, &label, output)?;
+    Ok(details(&scene, bytes, motions, cuts, splits))
+}
+
+/// Runs `sinew convert`.
+pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
+    // Options first: anything wrong here is a usage error (exit 2) before any work.
+    let lod = steps::lod_options(&args.lod)?;
+    let split = SplitPlan::parse(&args.split)?;
+    if let Some(spec) = &args.clips {
+        sinew_pipeline::cut::parse_cut_spec(spec).map_err(|e| anyhow!("--clips: {e}"))?;
+    }
+    if args.jobs == Some(0) {
+        bail!("--jobs: must be at least 1");
+    }
+    if args.map.is_some() && args.anim.is_empty() {
+        bail!("--map: needs at least one --anim motion file to apply to");
+    }
+    if args.retarget && args.anim.is_empty() {
+        bail!("--retarget: needs at least one --anim motion file");
+    }
+    let outputs: Vec<PathBuf> = match (&args.output, &args.out_dir) {
+        (Some(o), None) => {
+            if args.inputs.len() != 1 {
+                bail!(
+                    "-o/--output takes exactly one input ({} given); use --out-dir DIR for several",
+                    args.inputs.len()
+                );
+            }
+            check_output_path(o)?;
+            vec![o.clone()]
+        }
+        (None, Some(dir)) => {
+            if !dir.is_dir() {
+                bail!("{}: output directory does not exist", dir.display());
+            }
+            let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
+            let mut outs = Vec::with_capacity(args.inputs.len());
+            for i in &args.inputs {
+                let stem = i
+                    .file_stem()
+                    .ok_or_else(|| anyhow!("{}: has no file name", i.display()))?;
+                let mut name = stem.to_os_string();
+                name.push(".sinew");
+                let out = dir.join(name);
+                if let Some(prev) = seen.insert(out.clone(), i) {
+                    bail!(
+                        "{} and {} would both be written to {}",
+                        prev.display(),
+                        i.display(),
+                        out.display()
+                    );
+                }
+                outs.push(out);
+            }
+            outs
+        }
+        _ => bail!("convert: give -o OUT.sinew (one input) or --out-dir DIR"),
+    };
+    let map = args.map.as_deref().map(MappingFile::read).transpose()?;
+    let mut anims = Vec::with_capacity(args.anim.len());
+    for a in &args.anim {
+        anims.push((
+            a.display().to_string(),
+            crate::input::import(a, &args.import)?,
+        ));
+    }
+    let plan = Plan {
+        import: args.import.clone(),
+        anims,
+        map,
+        retarget: args.retarget,
+        clips: args.clips.clone(),
+        split,
+        lod,
+    };
+
+    // One input with -o: an error is the command's error (exit 2, one line).
+    if args.output.is_some() {
+        let (input, output) = (&args.inputs[0], &outputs[0]);
+        let d = convert_one(input, output, &plan)?;
+        let file = FileReport {
+            input: input.display().to_string(),
+            output: output.display().to_string(),
+            status: "converted",
+            error: None,
+            details: Some(d),
+        };
+        let report = ConvertReport {
+            inputs: 1,
+            converted: 1,
+            failed: 0,
+            files: vec![file],
+        };
+        emit(&report, ctx)?;
+        return Ok(Status::Success);
+    }
+
+    // Batch.
+    let bar = (!ctx.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::with_draw_target(
+            Some(args.inputs.len() as u64),
+            indicatif::ProgressDrawTarget::stderr(),
+        );
+        if let Ok(style) =
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} files, {elapsed} {msg}")
+        {
+            b.set_style(style);
+        }
+        b
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.jobs.unwrap_or(0))
+        .build()
+        .map_err(|e| anyhow!("--jobs: cannot start worker threads: {e}"))?;
+    let files: Vec<FileReport> = pool.install(|| {
+        args.inputs
+            .par_iter()
+            .zip(outputs.par_iter())
+            .map(|(input, output)| {
+                let result = convert_one(input, output, &plan);
+                if let Some(b) = &bar {
+                    b.inc(1);
+                }
+                let (status, error, details) = match result {
+                    Ok(d) => ("converted", None, Some(d)),
+                    Err(e) => ("failed", Some(crate::output::one_line(&e)), None),
+                };
+                FileReport {
+                    input: input.display().to_string(),
+                    output: output.display().to_string(),
+                    status,
+                    error,
+                    details,
+                }
+            })
+            .collect()
+    });
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let failed = files.iter().filter(|f| f.error.is_some()).count();
+    let report = ConvertReport {
+        inputs: files.len(),
+        converted: files.len() - failed,
+        failed,
+        files,
+    };
+    emit(&report, ctx)?;
+    // Failures are errors: listed on stderr even with --quiet or --json.
+    for f in &report.files {
+        if let Some(e) = &f.error {
+            eprintln!("sinew: error: {e}");
+        }
+    }
+    if failed > 0 {
+        if !ctx.quiet {
+            eprintln!(
+                "sinew: {failed} of {} files failed; {} converted",
+                report.inputs, report.converted
+            );
+        }
+        return Ok(Status::CheckFailed);
+    }
+    Ok(Status::Success)
+}
+
+fn emit(report: &ConvertReport, ctx: &Ctx) -> anyhow::Result<()> {
+    if ctx.json {
+        print_json(report)?;
+    } else if ctx.human() {
+        for f in &report.files {
+            if let Some(d) = &f.details {
+                eprint!("{}", human_details(&f.input, &f.output, d));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Prints the report of a command that writes one output (`split`, `lod`): a [`FileReport`] as JSON,
+/// or its human summary.
+pub fn emit_one(input: &str, output: &Path, d: OutputDetails, ctx: &Ctx) -> anyhow::Result<()> {
+    let f = FileReport {
+        input: input.to_string(),
+        output: output.display().to_string(),
+        status: "converted",
+        error: None,
+        details: Some(d),
+    };
+    if ctx.json {
+        print_json(&f)?;
+    } else if ctx.human() {
+        if let Some(d) = &f.details {
+            eprint!("{}", human_details(&f.input, &f.output, d));
+        }
+    }
+    Ok(())
+}
+
+/// The human-readable summary of one output (stderr).
+pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
+    let mut o = String::new();
+    let tris: usize = d.meshes.iter().map(|m| m.triangles).sum();
+    let _ = writeln!(
+        o,
+        "{input} -> {output}: {} bytes, {} joints, {} meshes ({tris} triangles), {} clips",
+        d.bytes,
+        d.joints,
+        d.meshes.len(),
+        d.clips.len()
+    );
+    for m in &d.meshes {
+        if m.lods.is_empty() {
+            continue;
+        }
+        let lods: Vec<String> = m
+            .lods
+            .iter()
+            .map(|l| {
+                format!(
+                    "{} triangles ({}, error {}){}",
+                    l.triangles,
+                    num(l.reached_ratio),
+                    num(l.error_relative),
+                    if l.stopped_by_error_limit {
+                        " stopped by error limit"
+                    } else {
+                        ""
+                    }
+                )
+            })
+            .collect();
+        let _ = writeln!(
+            o,
+            "  mesh \"{}\": {} triangles; LODs: {}",
+            m.name,
+            m.triangles,
+            lods.join("; ")
+        );
+    }
+    for c in &d.clips {
+        let _ = writeln!(
+            o,
+            "  clip \"{}\": {} s, {} keys, drives {} joints",
+            c.name,
+            num(c.duration),
+            c.keys.total,
+            c.driven_joints
+        );
+    }
+    for m in &d.motions {
+        let _ = writeln!(
+            o,
+            "  motion {}: {} of {} rig joints bound{}; unmatched motion joints: {}",
+            m.file,
+            m.mapping.bound,
+            m.mapping.entries.len(),
+            if m.retargeted { ", retargeted" } else { "" },
+            if m.mapping.unmatched_motion.is_empty() {
+                "none".to_string()
+            } else {
+                m.mapping.unmatched_motion.join(", ")
+            }
+        );
+    }
+    for s in &d.splits {
+        for p in &s.parts {
+            let _ = writeln!(
+                o,
+                "  split \"{}\" -> \"{}\": {} joints: {}",
+                s.clip,
+                p.name,
+                p.joints.len(),
+                p.joints.join(", ")
+            );
+        }
+    }
+    for diag in &d.diagnostics {
+        if diag.level == "warning" {
+            let _ = writeln!(o, "  warning [{}] {}", diag.code, diag.message);
+        }
+    }
+    o
+}

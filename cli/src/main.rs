@@ -1,6 +1,5 @@
-//! The `sinew` command line. See docs/cli.md.
+//! The `sinew` binary; everything lives in the `sinew_cli` library (see its docs and docs/cli.md).
 
-fn main() {
-    eprintln!("sinew: no commands yet");
-    std::process::exit(2);
+fn main() -> std::process::ExitCode {
+    sinew_cli::main_entry()
 }

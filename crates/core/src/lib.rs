@@ -12,14 +12,21 @@
 //! - blending of weighted, masked and additive layers, and an animator holding per-character state;
 //! - local-to-model transforms, the skinning palette, and linear blend skinning of a [`Mesh`].
 
+pub mod animator;
+pub mod blend;
 pub mod clip;
+pub mod format;
 pub mod mesh;
 pub mod skeleton;
+pub mod skinning;
 pub mod transform;
 
+pub use animator::{Animator, AnimatorError, ClipId};
+pub use blend::{apply_additive, BlendBuffers, BlendError, Layer};
 pub use clip::{Channel, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves};
 pub use mesh::{Lod, Mesh, Submesh, MAX_INFLUENCES};
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
+pub use skinning::{local_to_model, skin, skin_lod, skinning_palette, SkinError};
 pub use transform::Transform;
 
 pub use glam;

@@ -1,3 +1,5 @@
 //! sinew-pipeline is everything between import and output: joint-name mapping, partial-body splitting,
 //! LOD generation, keyframe reduction and quantization, compiling a Scene into the `.sinew` runtime
 //! format, baking vertex caches and verifying them against the runtime.
+
+pub mod compile;

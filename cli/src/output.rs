@@ -1,0 +1,115 @@
+//! Where output goes: JSON reports on stdout, human text on stderr, files written atomically.
+
+use anyhow::{bail, Context};
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+
+/// The global output settings of one run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Ctx {
+    /// `--json`: print the report as JSON on stdout, no human report.
+    pub json: bool,
+    /// `--quiet`: nothing on stderr but errors.
+    pub quiet: bool,
+}
+
+impl Ctx {
+    /// Whether the human-readable report should be written (to stderr).
+    pub fn human(&self) -> bool {
+        !self.json && !self.quiet
+    }
+}
+
+/// Prints a report as pretty JSON on stdout, followed by a newline.
+pub fn print_json<T: Serialize>(report: &T) -> anyhow::Result<()> {
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    serde_json::to_writer_pretty(&mut out, report).context("stdout: writing the JSON report")?;
+    writeln!(out).context("stdout: writing the JSON report")?;
+    out.flush().context("stdout: writing the JSON report")?;
+    Ok(())
+}
+
+/// An error and its causes on one line (`outer: inner: innermost`), with any newline flattened.
+pub fn one_line(err: &anyhow::Error) -> String {
+    format!("{err:#}").replace(['\r', '\n'], " ")
+}
+
+/// Checks that `path` can be an output file: its directory exists and it is not itself a directory.
+/// Call this before any expensive work so a bad output path fails fast and writes nothing.
+pub fn check_output_path(path: &Path) -> anyhow::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "{}: output directory {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    if path.is_dir() {
+        bail!("{}: output path is a directory", path.display());
+    }
+    Ok(())
+}
+
+/// Writes `bytes` to `path` atomically: into a temporary file in the same directory, then renamed over
+/// `path`. A failure at any point leaves no file at `path` (and no temporary file behind).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+    check_output_path(path)?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".sinew-tmp-")
+        .tempfile_in(dir)
+        .with_context(|| format!("{}: creating a temporary file", path.display()))?;
+    tmp.write_all(bytes)
+        .and_then(|()| tmp.as_file().sync_all())
+        .with_context(|| format!("{}: writing", path.display()))?;
+    tmp.persist(path)
+        .map_err(|e| e.error)
+        .with_context(|| format!("{}: renaming the temporary file into place", path.display()))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_content_and_leaves_no_temp() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.bin");
+        write_atomic(&out, b"first").unwrap();
+        write_atomic(&out, b"second!").unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), b"second!");
+        let names: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("a.bin")]);
+    }
+
+    #[test]
+    fn missing_directory_is_an_error_naming_the_path() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("nope/a.bin");
+        let err = write_atomic(&out, b"x").unwrap_err();
+        let msg = one_line(&err);
+        assert!(msg.contains("nope/a.bin"), "{msg}");
+        assert!(msg.contains("does not exist"), "{msg}");
+        assert!(!dir.path().join("nope").exists());
+    }
+
+    #[test]
+    fn directory_as_output_is_an_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = write_atomic(dir.path(), b"x").unwrap_err();
+        assert!(one_line(&err).contains("is a directory"));
+    }
+}

@@ -1,0 +1,301 @@
+//! Runtime benchmarks: one character frame on a 40-joint Biped skeleton, skinning throughput, and a
+//! memcpy for the machine's memory bandwidth. Figures are in docs/performance.md.
+
+#![allow(clippy::unwrap_used)] // benchmark set-up on known-good data
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use sinew_core::glam::{Mat4, Quat, Vec3};
+use sinew_core::{
+    local_to_model, skin, skinning_palette, Animator, BlendBuffers, Clip, ClipBinding, Curve,
+    JointDesc, Layer, Sampler, Skeleton, TrackCurves, Transform,
+};
+use std::hint::black_box;
+use std::sync::Arc;
+
+/// A 3ds Max Biped-like skeleton of 40 joints.
+fn biped() -> Skeleton {
+    let mut joints: Vec<(String, Option<String>, Vec3)> = Vec::new();
+    let mut add = |name: &str, parent: Option<&str>, offset: Vec3| {
+        joints.push((name.into(), parent.map(Into::into), offset));
+    };
+    add("Bip01", None, Vec3::new(0.0, 40.0, 0.0));
+    add("Bip01 Pelvis", Some("Bip01"), Vec3::ZERO);
+    add(
+        "Bip01 Spine",
+        Some("Bip01 Pelvis"),
+        Vec3::new(0.0, 4.0, 0.0),
+    );
+    add(
+        "Bip01 Spine1",
+        Some("Bip01 Spine"),
+        Vec3::new(0.0, 5.0, 0.0),
+    );
+    add(
+        "Bip01 Spine2",
+        Some("Bip01 Spine1"),
+        Vec3::new(0.0, 5.0, 0.0),
+    );
+    add(
+        "Bip01 Spine3",
+        Some("Bip01 Spine2"),
+        Vec3::new(0.0, 5.0, 0.0),
+    );
+    add("Bip01 Neck", Some("Bip01 Spine3"), Vec3::new(0.0, 6.0, 0.0));
+    add("Bip01 Head", Some("Bip01 Neck"), Vec3::new(0.0, 3.0, 0.0));
+    for (side, s) in [("L", 1.0f32), ("R", -1.0)] {
+        let p = |n: &str| format!("Bip01 {side} {n}");
+        add(
+            &p("Clavicle"),
+            Some("Bip01 Neck"),
+            Vec3::new(s * 2.0, -1.0, 0.0),
+        );
+        add(
+            &p("UpperArm"),
+            Some(&p("Clavicle")),
+            Vec3::new(s * 5.0, 0.0, 0.0),
+        );
+        add(
+            &p("Forearm"),
+            Some(&p("UpperArm")),
+            Vec3::new(s * 10.0, 0.0, 0.0),
+        );
+        add(
+            &p("Hand"),
+            Some(&p("Forearm")),
+            Vec3::new(s * 9.0, 0.0, 0.0),
+        );
+        for f in 0..3 {
+            let base = p(&format!("Finger{f}"));
+            add(
+                &base,
+                Some(&p("Hand")),
+                Vec3::new(s * 3.0, 0.0, f as f32 - 1.0),
+            );
+            add(
+                &format!("{base}1"),
+                Some(&base),
+                Vec3::new(s * 1.5, 0.0, 0.0),
+            );
+        }
+    }
+    for (side, s) in [("L", 1.0f32), ("R", -1.0)] {
+        let p = |n: &str| format!("Bip01 {side} {n}");
+        add(
+            &p("Thigh"),
+            Some("Bip01 Pelvis"),
+            Vec3::new(s * 4.0, -2.0, 0.0),
+        );
+        add(&p("Calf"), Some(&p("Thigh")), Vec3::new(0.0, -17.0, 0.0));
+        add(&p("Foot"), Some(&p("Calf")), Vec3::new(0.0, -17.0, 0.0));
+        add(&p("Toe0"), Some(&p("Foot")), Vec3::new(0.0, -3.0, 4.0));
+        add(&p("Toe01"), Some(&p("Toe0")), Vec3::new(0.0, 0.0, 1.5));
+        add(&p("Toe02"), Some(&p("Toe01")), Vec3::new(0.0, 0.0, 1.0));
+    }
+    assert_eq!(joints.len(), 40);
+    let descs = joints
+        .into_iter()
+        .map(|(name, parent, t)| JointDesc {
+            name,
+            parent,
+            bind_local: Transform::from_translation(t),
+            inverse_bind: None,
+        })
+        .collect();
+    Skeleton::from_unordered(descs).unwrap().0
+}
+
+/// A looping 1 s clip at 30 Hz (30 keys) animating translation and rotation of every joint.
+fn clip(name: &str, skeleton: &Skeleton, phase: f32) -> Clip {
+    let times: Vec<f32> = (0..30).map(|k| k as f32 / 30.0).collect();
+    let tracks = skeleton
+        .names()
+        .iter()
+        .enumerate()
+        .map(|(j, n)| {
+            let bind = skeleton.bind_local()[j];
+            let angle = |t: f32| (t * std::f32::consts::TAU + phase + j as f32).sin() * 0.4;
+            TrackCurves {
+                joint: n.clone(),
+                translation: Curve::new(
+                    times.clone(),
+                    times
+                        .iter()
+                        .map(|&t| bind.translation + Vec3::Y * angle(t) * 0.1)
+                        .collect(),
+                ),
+                rotation: Curve::new(
+                    times.clone(),
+                    times
+                        .iter()
+                        .map(|&t| Quat::from_rotation_x(angle(t)) * Quat::from_rotation_z(0.1))
+                        .collect(),
+                ),
+                scale: Curve::default(),
+            }
+        })
+        .collect();
+    Clip::from_curves(name, 1.0, 30.0, true, false, tracks).unwrap()
+}
+
+fn upper_body_mask(skeleton: &Skeleton) -> Vec<f32> {
+    let mut mask = vec![0.0; skeleton.len()];
+    let spine = skeleton.find("Bip01 Spine").unwrap();
+    for j in skeleton.subtree(spine) {
+        mask[j as usize] = 1.0;
+    }
+    mask
+}
+
+fn frame(c: &mut Criterion) {
+    let skeleton = Arc::new(biped());
+    let n = skeleton.len();
+    let walk = Arc::new(clip("walk", &skeleton, 0.0));
+    let wave = Arc::new(clip("wave", &skeleton, 1.0));
+    let upper = upper_body_mask(&skeleton);
+    let lower: Vec<f32> = upper.iter().map(|m| 1.0 - m).collect();
+
+    let mut anim = Animator::new(skeleton.clone());
+    let a = anim.add_clip(walk.clone());
+    let b = anim.add_clip(wave.clone());
+    anim.set_mask(a, Some(lower.clone())).unwrap();
+    anim.set_mask(b, Some(upper.clone())).unwrap();
+    anim.play(a).unwrap();
+    anim.activate(b).unwrap();
+    let mut locals = vec![Transform::IDENTITY; n];
+    let mut models = vec![Mat4::IDENTITY; n];
+    let mut palette = vec![Mat4::IDENTITY; n];
+
+    let mut g = c.benchmark_group("frame_40_joints");
+    g.bench_function("animator_full_frame", |bench| {
+        bench.iter(|| {
+            anim.update(black_box(1.0 / 60.0));
+            anim.evaluate(&mut locals).unwrap();
+            local_to_model(skeleton.parents(), &locals, &mut models).unwrap();
+            skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
+            black_box(&palette);
+        })
+    });
+
+    // The same work without the animator, step by step.
+    let bind_a = ClipBinding::new(&walk, &skeleton);
+    let bind_b = ClipBinding::new(&wave, &skeleton);
+    let (mut sa, mut sb) = (Sampler::new(), Sampler::new());
+    let mut pose_a = skeleton.bind_local().to_vec();
+    let mut pose_b = skeleton.bind_local().to_vec();
+    let mut buffers = BlendBuffers::new(n);
+    let mut t = 0.0f32;
+    g.bench_function("sample_two_clips", |bench| {
+        bench.iter(|| {
+            t += 1.0 / 60.0;
+            sa.sample(&walk, &bind_a, &skeleton, t, &mut pose_a)
+                .unwrap();
+            sb.sample(&wave, &bind_b, &skeleton, t, &mut pose_b)
+                .unwrap();
+            black_box((&pose_a, &pose_b));
+        })
+    });
+    g.bench_function("blend_two_masked", |bench| {
+        bench.iter(|| {
+            buffers
+                .blend(
+                    skeleton.bind_local(),
+                    &[
+                        Layer::new(&pose_a, bind_a.driven()).with_mask(&lower),
+                        Layer::new(&pose_b, bind_b.driven()).with_mask(&upper),
+                    ],
+                    &[],
+                    &mut locals,
+                )
+                .unwrap();
+            black_box(&locals);
+        })
+    });
+    g.bench_function("local_to_model_and_palette", |bench| {
+        bench.iter(|| {
+            local_to_model(skeleton.parents(), black_box(&locals), &mut models).unwrap();
+            skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
+            black_box(&palette);
+        })
+    });
+    g.finish();
+}
+
+/// xorshift32, for repeatable pseudo-random inputs.
+struct Rng(u32);
+impl Rng {
+    fn next(&mut self) -> u32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        self.0
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 8) as f32 / (1u32 << 24) as f32
+    }
+}
+
+const VERTICES: usize = 100_000;
+
+fn skinning(c: &mut Criterion) {
+    let skeleton = biped();
+    let n = skeleton.len();
+    let walk = clip("walk", &skeleton, 0.0);
+    let binding = ClipBinding::new(&walk, &skeleton);
+    let mut locals = skeleton.bind_local().to_vec();
+    Sampler::new()
+        .sample(&walk, &binding, &skeleton, 0.37, &mut locals)
+        .unwrap();
+    let mut models = vec![Mat4::IDENTITY; n];
+    let mut palette = vec![Mat4::IDENTITY; n];
+    local_to_model(skeleton.parents(), &locals, &mut models).unwrap();
+    skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
+
+    let mut rng = Rng(0x1234_5678);
+    let mut positions = Vec::with_capacity(VERTICES);
+    let mut normals = Vec::with_capacity(VERTICES);
+    let mut joints = Vec::with_capacity(VERTICES);
+    let mut weights = Vec::with_capacity(VERTICES);
+    for _ in 0..VERTICES {
+        positions.push(Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 100.0 - 50.0);
+        normals.push((Vec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5).normalize_or(Vec3::Y));
+        let base = (rng.next() % n as u32) as u16;
+        joints.push([0, 1, 2, 3].map(|k| ((base as usize + k) % n) as u16));
+        let w = [rng.unit() + 0.1, rng.unit(), rng.unit(), rng.unit()];
+        let s: f32 = w.iter().sum();
+        weights.push(w.map(|x| x / s));
+    }
+    let mut out_p = vec![Vec3::ZERO; VERTICES];
+    let mut out_n = vec![Vec3::ZERO; VERTICES];
+
+    let mut g = c.benchmark_group("skinning");
+    g.throughput(Throughput::Elements(VERTICES as u64));
+    g.bench_function("lbs4_positions_normals_100k", |bench| {
+        bench.iter(|| {
+            skin(
+                &palette, &positions, &normals, &joints, &weights, &mut out_p, &mut out_n,
+            )
+            .unwrap();
+            black_box((&out_p, &out_n));
+        })
+    });
+    g.finish();
+
+    // Memory bandwidth, roughly: copy 256 MiB (far beyond the 32 MiB L3). Throughput counts the bytes
+    // copied once; the memory traffic is that read plus that written.
+    const BYTES: usize = 256 << 20;
+    let src = vec![1u8; BYTES];
+    let mut dst = vec![0u8; BYTES];
+    let mut g = c.benchmark_group("memory");
+    g.sample_size(10);
+    g.throughput(Throughput::Bytes(BYTES as u64));
+    g.bench_function("memcpy_256MiB", |bench| {
+        bench.iter(|| {
+            dst.copy_from_slice(black_box(&src));
+            black_box(&dst);
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, frame, skinning);
+criterion_main!(benches);

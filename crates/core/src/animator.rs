@@ -1,0 +1,502 @@
+//! Per-character animation state over shared clips: layers, a play queue with cross-fades, dormant clips.
+//!
+//! An [`Animator`] holds, for one character, every clip it may play. Each clip is added once
+//! ([`Animator::add_clip`]): it is bound to the skeleton by name, given a sampling cursor and a pose
+//! buffer, and starts **dormant** (bound, not playing). A dormant clip costs nothing per frame and can be
+//! activated at any time without rebinding or allocating.
+//!
+//! Playing clips are **layers**. A layer has a time, a speed, a weight, an optional per-joint mask, and a
+//! fade factor (0..1, moved linearly by fades). Its effective weight is `weight * fade`. Non-additive
+//! layers are blended with [`BlendBuffers`]; additive layers are applied on top, in the order the clips
+//! were added (see [`crate::blend`]).
+//!
+//! One layer may be the **current** clip of the play sequence, with a **queue** of clips to play next.
+//! When the current clip ends — a non-looping clip reaching its duration, or a looping clip completing
+//! a cycle — and the queue is not empty, the next clip starts at time 0 and fades in linearly over its
+//! fade length while the previous one fades out over the same length (from whatever fade factor it had
+//! to 0) and then goes dormant. [`Animator::cross_fade`] and [`Animator::skip`] do the same immediately.
+//! Time past the end inside the frame that ended the clip is carried over into the next clip and its
+//! fade, so the transition does not depend on frame boundaries. A clip only ends while its speed is
+//! positive. A non-looping clip that ended holds its last frame while it fades out.
+//!
+//! [`Animator::update`] and [`Animator::evaluate`] never allocate.
+
+use crate::blend::{apply_additive, BlendBuffers, BlendError, Layer};
+use crate::clip::{ClipBinding, ClipError, Sampler};
+use crate::{Clip, Skeleton, Transform};
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+/// Identifies a clip inside one [`Animator`] (the order clips were added, from 0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ClipId(pub usize);
+
+/// Why an animator call was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnimatorError {
+    /// No clip with this id was added.
+    #[error("no clip {0:?} in this animator")]
+    UnknownClip(ClipId),
+    /// A mask has the wrong length or a negative or non-finite value.
+    #[error("mask must hold {expected} finite values >= 0 (got {got} values)")]
+    BadMask {
+        /// Joints in the skeleton.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A weight, speed, time or fade length that is not finite (or a negative fade length).
+    #[error("{0} must be finite (and a fade length not negative)")]
+    BadValue(&'static str),
+    /// Sampling failed (a binding made for another skeleton, or a wrong output length).
+    #[error(transparent)]
+    Clip(#[from] ClipError),
+    /// Blending failed.
+    #[error(transparent)]
+    Blend(#[from] BlendError),
+}
+
+/// A linear fade of a layer's fade factor from `from` to `to` over `length` seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fade {
+    from: f32,
+    to: f32,
+    elapsed: f32,
+    length: f32,
+}
+
+impl Fade {
+    const FULL: Fade = Fade {
+        from: 1.0,
+        to: 1.0,
+        elapsed: 0.0,
+        length: 0.0,
+    };
+
+    fn factor(&self) -> f32 {
+        if self.length <= 0.0 || self.elapsed >= self.length {
+            self.to
+        } else {
+            self.from + (self.to - self.from) * (self.elapsed / self.length)
+        }
+    }
+
+    fn done(&self) -> bool {
+        self.length <= 0.0 || self.elapsed >= self.length
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Slot {
+    clip: Arc<Clip>,
+    binding: Arc<ClipBinding>,
+    sampler: Sampler,
+    pose: Vec<Transform>,
+    mask: Option<Vec<f32>>,
+    active: bool,
+    time: f32,
+    speed: f32,
+    weight: f32,
+    fade: Fade,
+}
+
+/// Per-character animation state. See the module docs.
+#[derive(Debug, Clone)]
+pub struct Animator {
+    skeleton: Arc<Skeleton>,
+    slots: Vec<Slot>,
+    current: Option<usize>,
+    queue: VecDeque<(usize, f32)>,
+    buffers: BlendBuffers,
+}
+
+impl Animator {
+    /// An animator with no clips for a character on `skeleton`.
+    pub fn new(skeleton: Arc<Skeleton>) -> Self {
+        let n = skeleton.len();
+        Self {
+            skeleton,
+            slots: Vec::new(),
+            current: None,
+            queue: VecDeque::new(),
+            buffers: BlendBuffers::new(n),
+        }
+    }
+
+    /// The skeleton this animator poses.
+    pub fn skeleton(&self) -> &Arc<Skeleton> {
+        &self.skeleton
+    }
+
+    /// Adds a clip, binding it to the skeleton by joint name. The clip starts dormant.
+    pub fn add_clip(&mut self, clip: Arc<Clip>) -> ClipId {
+        let binding = Arc::new(ClipBinding::new(&clip, &self.skeleton));
+        self.push_slot(clip, binding)
+    }
+
+    /// Adds a clip with a binding made earlier (and shared between characters). The binding must have
+    /// been made for this clip and this animator's skeleton.
+    pub fn add_bound_clip(
+        &mut self,
+        clip: Arc<Clip>,
+        binding: Arc<ClipBinding>,
+    ) -> Result<ClipId, AnimatorError> {
+        // Sampling once checks the binding against clip and skeleton.
+        let mut pose = self.skeleton.bind_local().to_vec();
+        Sampler::new().sample(&clip, &binding, &self.skeleton, 0.0, &mut pose)?;
+        Ok(self.push_slot(clip, binding))
+    }
+
+    fn push_slot(&mut self, clip: Arc<Clip>, binding: Arc<ClipBinding>) -> ClipId {
+        let id = self.slots.len();
+        self.slots.push(Slot {
+            clip,
+            binding,
+            sampler: Sampler::new(),
+            pose: self.skeleton.bind_local().to_vec(),
+            mask: None,
+            active: false,
+            time: 0.0,
+            speed: 1.0,
+            weight: 1.0,
+            fade: Fade::FULL,
+        });
+        self.queue.reserve(self.slots.len());
+        ClipId(id)
+    }
+
+    fn slot(&self, id: ClipId) -> Result<&Slot, AnimatorError> {
+        self.slots.get(id.0).ok_or(AnimatorError::UnknownClip(id))
+    }
+
+    fn slot_mut(&mut self, id: ClipId) -> Result<&mut Slot, AnimatorError> {
+        self.slots
+            .get_mut(id.0)
+            .ok_or(AnimatorError::UnknownClip(id))
+    }
+
+    /// Number of clips added.
+    pub fn clip_count(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// The clip behind an id.
+    pub fn clip(&self, id: ClipId) -> Result<&Arc<Clip>, AnimatorError> {
+        Ok(&self.slot(id)?.clip)
+    }
+
+    /// The binding of a clip (for its unmatched track names).
+    pub fn binding(&self, id: ClipId) -> Result<&Arc<ClipBinding>, AnimatorError> {
+        Ok(&self.slot(id)?.binding)
+    }
+
+    /// Sets or clears a clip's per-joint mask (one value >= 0 per skeleton joint).
+    pub fn set_mask(&mut self, id: ClipId, mask: Option<Vec<f32>>) -> Result<(), AnimatorError> {
+        let n = self.skeleton.len();
+        if let Some(m) = &mask {
+            if m.len() != n || !m.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(AnimatorError::BadMask {
+                    expected: n,
+                    got: m.len(),
+                });
+            }
+        }
+        self.slot_mut(id)?.mask = mask;
+        Ok(())
+    }
+
+    /// Sets a clip's layer weight (default 1).
+    pub fn set_weight(&mut self, id: ClipId, weight: f32) -> Result<(), AnimatorError> {
+        finite(weight, "weight")?;
+        self.slot_mut(id)?.weight = weight;
+        Ok(())
+    }
+
+    /// Sets a clip's playback speed (default 1; negative plays backwards).
+    pub fn set_speed(&mut self, id: ClipId, speed: f32) -> Result<(), AnimatorError> {
+        finite(speed, "speed")?;
+        self.slot_mut(id)?.speed = speed;
+        Ok(())
+    }
+
+    /// Sets a clip's playback time, seconds.
+    pub fn set_time(&mut self, id: ClipId, time: f32) -> Result<(), AnimatorError> {
+        finite(time, "time")?;
+        self.slot_mut(id)?.time = time;
+        Ok(())
+    }
+
+    /// A clip's playback time (wrapped for looping clips, clamped for others).
+    pub fn time(&self, id: ClipId) -> Result<f32, AnimatorError> {
+        Ok(self.slot(id)?.time)
+    }
+
+    /// True when the clip is playing (it is a layer), false when dormant.
+    pub fn is_active(&self, id: ClipId) -> Result<bool, AnimatorError> {
+        Ok(self.slot(id)?.active)
+    }
+
+    /// A clip's effective blend weight this frame: `weight * fade`, or 0 when dormant.
+    pub fn effective_weight(&self, id: ClipId) -> Result<f32, AnimatorError> {
+        let s = self.slot(id)?;
+        Ok(if s.active {
+            s.weight * s.fade.factor()
+        } else {
+            0.0
+        })
+    }
+
+    /// Makes a dormant clip a layer at time 0 and full fade (an active clip keeps its time), outside the
+    /// play sequence. Use this for masked or additive layers on top of the sequence.
+    pub fn activate(&mut self, id: ClipId) -> Result<(), AnimatorError> {
+        let s = self.slot_mut(id)?;
+        if !s.active {
+            s.time = 0.0;
+            s.sampler = Sampler::new();
+        }
+        s.active = true;
+        s.fade = Fade::FULL;
+        Ok(())
+    }
+
+    /// Fades a layer's fade factor linearly to `to` over `length` seconds (activating it at fade 0 and
+    /// time 0 if dormant). A layer that fades to 0 goes dormant when the fade ends.
+    pub fn fade_to(&mut self, id: ClipId, to: f32, length: f32) -> Result<(), AnimatorError> {
+        finite(to, "fade target")?;
+        fade_length(length)?;
+        let s = self.slot_mut(id)?;
+        let from = if s.active { s.fade.factor() } else { 0.0 };
+        if !s.active {
+            s.time = 0.0;
+            s.sampler = Sampler::new();
+        }
+        s.active = true;
+        s.fade = Fade {
+            from,
+            to,
+            elapsed: 0.0,
+            length,
+        };
+        Ok(())
+    }
+
+    /// Stops a layer at once; it goes dormant (still bound). If it was the current clip, the sequence
+    /// has no current clip until the next [`play`](Self::play), [`cross_fade`](Self::cross_fade) or
+    /// [`skip`](Self::skip).
+    pub fn deactivate(&mut self, id: ClipId) -> Result<(), AnimatorError> {
+        self.slot_mut(id)?.active = false;
+        if self.current == Some(id.0) {
+            self.current = None;
+        }
+        Ok(())
+    }
+
+    /// The current clip of the play sequence.
+    pub fn current(&self) -> Option<ClipId> {
+        self.current.map(ClipId)
+    }
+
+    /// The queued clips with their fade lengths, next first.
+    pub fn queued(&self) -> impl Iterator<Item = (ClipId, f32)> + '_ {
+        self.queue.iter().map(|&(i, f)| (ClipId(i), f))
+    }
+
+    /// Makes `id` the current clip at once, with no fade: the previous current clip goes dormant.
+    pub fn play(&mut self, id: ClipId) -> Result<(), AnimatorError> {
+        self.cross_fade(id, 0.0)
+    }
+
+    /// Makes `id` the current clip now, starting at time 0 and fading in over `fade` seconds while the
+    /// previous current clip fades out. The queue is kept and follows the new clip.
+    pub fn cross_fade(&mut self, id: ClipId, fade: f32) -> Result<(), AnimatorError> {
+        fade_length(fade)?;
+        self.slot(id)?;
+        self.transition(id.0, fade, 0.0);
+        Ok(())
+    }
+
+    /// Queues `id` to start, with a cross-fade of `fade` seconds, when the clips queued before it have
+    /// played. With no current clip it starts now.
+    pub fn enqueue(&mut self, id: ClipId, fade: f32) -> Result<(), AnimatorError> {
+        fade_length(fade)?;
+        self.slot(id)?;
+        if self.current.is_none() {
+            self.transition(id.0, fade, 0.0);
+        } else {
+            self.queue.push_back((id.0, fade));
+        }
+        Ok(())
+    }
+
+    /// Starts the next queued clip now, with its fade. Returns false when the queue is empty.
+    pub fn skip(&mut self) -> bool {
+        match self.queue.pop_front() {
+            Some((next, fade)) => {
+                self.transition(next, fade, 0.0);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Removes every queued clip.
+    pub fn clear_queue(&mut self) {
+        self.queue.clear();
+    }
+
+    /// `next` becomes current; `carry` seconds have already passed since the switch.
+    fn transition(&mut self, next: usize, fade: f32, carry: f32) {
+        if let Some(prev) = self.current {
+            if prev != next {
+                if let Some(p) = self.slots.get_mut(prev) {
+                    if fade <= 0.0 {
+                        p.active = false;
+                    } else {
+                        p.fade = Fade {
+                            from: p.fade.factor(),
+                            to: 0.0,
+                            elapsed: carry,
+                            length: fade,
+                        };
+                        if p.fade.done() {
+                            p.active = false;
+                        }
+                    }
+                }
+            }
+        }
+        let Some(s) = self.slots.get_mut(next) else {
+            return;
+        };
+        let from = if s.active { s.fade.factor() } else { 0.0 };
+        s.active = true;
+        s.sampler = Sampler::new();
+        s.time = wrap_time(&s.clip, carry * s.speed);
+        s.fade = if fade <= 0.0 {
+            Fade::FULL
+        } else {
+            Fade {
+                from,
+                to: 1.0,
+                elapsed: carry,
+                length: fade,
+            }
+        };
+        self.current = Some(next);
+    }
+
+    /// Advances every layer's time by `dt * speed` and every fade by `dt` seconds, then moves the queue
+    /// on if the current clip ended. A `dt` that is negative or not finite does nothing.
+    pub fn update(&mut self, dt: f32) {
+        if !dt.is_finite() || dt < 0.0 {
+            return;
+        }
+        let mut ended: Option<f32> = None;
+        for (i, s) in self.slots.iter_mut().enumerate() {
+            if !s.active {
+                continue;
+            }
+            let d = s.clip.duration();
+            let raw = s.time + dt * s.speed;
+            if self.current == Some(i) && s.speed > 0.0 && raw >= d {
+                // Seconds of this frame left after the end.
+                ended = Some(((raw - d) / s.speed).clamp(0.0, dt));
+            }
+            s.time = wrap_time(&s.clip, raw);
+            s.fade.elapsed += dt;
+            if s.fade.done() && s.fade.to <= 0.0 {
+                s.active = false;
+                if self.current == Some(i) {
+                    self.current = None;
+                }
+            }
+        }
+        if let Some(carry) = ended {
+            if let Some((next, fade)) = self.queue.pop_front() {
+                self.transition(next, fade, carry);
+            }
+        }
+    }
+
+    /// Samples every active layer with its own cursor and blends them into `out` (one local transform
+    /// per skeleton joint). Joints no layer drives take the bind pose.
+    pub fn evaluate(&mut self, out: &mut [Transform]) -> Result<(), AnimatorError> {
+        let skeleton = &*self.skeleton;
+        if out.len() != skeleton.len() {
+            return Err(ClipError::OutputLength {
+                expected: skeleton.len(),
+                got: out.len(),
+            }
+            .into());
+        }
+        self.buffers.reset();
+        for s in self.slots.iter_mut() {
+            let w = s.weight * s.fade.factor();
+            if !s.active || s.clip.additive() || w.is_nan() || w <= 0.0 {
+                continue;
+            }
+            s.sampler
+                .sample(&s.clip, &s.binding, skeleton, s.time, &mut s.pose)?;
+            self.buffers.accumulate(&Layer {
+                pose: &s.pose,
+                driven: s.binding.driven(),
+                weight: w,
+                mask: s.mask.as_deref(),
+            })?;
+        }
+        self.buffers.resolve(skeleton.bind_local(), out)?;
+        for s in self.slots.iter_mut() {
+            let w = s.weight * s.fade.factor();
+            if !s.active || !s.clip.additive() || w.is_nan() || w <= 0.0 {
+                continue;
+            }
+            s.sampler
+                .sample(&s.clip, &s.binding, skeleton, s.time, &mut s.pose)?;
+            apply_additive(
+                out,
+                &Layer {
+                    pose: &s.pose,
+                    driven: s.binding.driven(),
+                    weight: w,
+                    mask: s.mask.as_deref(),
+                },
+            )?;
+        }
+        Ok(())
+    }
+}
+
+/// Wraps a looping clip's time into `[0, duration)`; clamps a non-looping clip's into `[0, duration]`.
+fn wrap_time(clip: &Clip, t: f32) -> f32 {
+    let d = clip.duration();
+    if clip.looping() {
+        if d > 0.0 {
+            let r = t.rem_euclid(d);
+            if r >= d {
+                0.0
+            } else {
+                r
+            }
+        } else {
+            0.0
+        }
+    } else {
+        t.clamp(0.0, d)
+    }
+}
+
+fn finite(v: f32, what: &'static str) -> Result<(), AnimatorError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(AnimatorError::BadValue(what))
+    }
+}
+
+fn fade_length(v: f32) -> Result<(), AnimatorError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(AnimatorError::BadValue("fade length"))
+    }
+}

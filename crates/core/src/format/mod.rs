@@ -1,0 +1,362 @@
+//! The `.sinew` container, version 1: a little-endian, sectioned, checksummed binary file holding a
+//! skeleton, materials, meshes with their LOD chains, and clips. `docs/format.md` documents every byte.
+//!
+//! - [`write`] turns an [`Asset`] into bytes. It is deterministic: the same asset gives the same bytes.
+//! - [`read`] turns bytes into an [`Asset`]. It takes untrusted input: every count is checked against
+//!   the bytes present before anything is allocated, every section's CRC-32 is verified, and every
+//!   failure is a [`FormatError`] naming the section, the byte offset and what is wrong. It never panics.
+//! - [`sections`] lists the section table (tags, offsets, sizes, checksums) for inspection.
+//!
+//! No file I/O happens here: bytes in, plain data out.
+
+mod error;
+mod read;
+mod write;
+
+pub use error::{FormatError, FormatErrorKind};
+pub use read::{read, sections};
+pub use write::write;
+
+use crate::{Clip, Lod, Mesh, Skeleton};
+use std::fmt;
+
+/// The eight bytes every `.sinew` file starts with. The high-bit first byte catches 7-bit transfers;
+/// CR LF catches line-ending conversion either way; 0x1A stops a DOS `type`.
+pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
+/// Major version this crate writes and reads. Files with another major version are rejected.
+pub const VERSION_MAJOR: u16 = 1;
+/// Minor version this crate writes. Files with a higher minor version still load.
+pub const VERSION_MINOR: u16 = 0;
+/// Size of the file header in bytes.
+pub const HEADER_SIZE: usize = 48;
+/// Size of a section table entry written by this version (readers accept larger entries).
+pub const SECTION_ENTRY_SIZE: usize = 32;
+/// Alignment of every section and of every array inside a section, in bytes.
+pub const ALIGN: usize = 16;
+/// Layout version of every section this crate knows.
+pub const SECTION_VERSION: u32 = 1;
+/// String index meaning "no string" (an absent texture).
+pub const NO_STRING: u32 = u32::MAX;
+/// Parent index meaning "root joint".
+pub const NO_PARENT: u16 = u16::MAX;
+
+/// A section's four-byte tag.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Tag(pub [u8; 4]);
+
+impl Tag {
+    /// The string table.
+    pub const STRINGS: Tag = Tag(*b"STRS");
+    /// The skeleton.
+    pub const SKELETON: Tag = Tag(*b"SKEL");
+    /// The materials.
+    pub const MATERIALS: Tag = Tag(*b"MATL");
+    /// The meshes and their LODs.
+    pub const MESHES: Tag = Tag(*b"MESH");
+    /// The clips.
+    pub const CLIPS: Tag = Tag(*b"CLIP");
+    /// The tags version 1 defines, in the order the writer emits them.
+    pub const KNOWN: [Tag; 5] = [
+        Tag::STRINGS,
+        Tag::SKELETON,
+        Tag::MATERIALS,
+        Tag::MESHES,
+        Tag::CLIPS,
+    ];
+
+    /// True for the tags version 1 defines.
+    pub fn is_known(self) -> bool {
+        Tag::KNOWN.contains(&self)
+    }
+}
+
+impl fmt::Display for Tag {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for &b in &self.0 {
+            if b.is_ascii_graphic() || b == b' ' {
+                write!(f, "{}", b as char)?;
+            } else {
+                write!(f, "\\x{b:02x}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Debug for Tag {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Tag({self})")
+    }
+}
+
+/// One entry of the section table, as [`sections`] reports it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SectionInfo {
+    /// The section's tag.
+    pub tag: Tag,
+    /// The section's layout version (1 for every section of format 1.0).
+    pub version: u32,
+    /// Byte offset of the section from the start of the file.
+    pub offset: u64,
+    /// Size of the section in bytes (padding after it not included).
+    pub size: u64,
+    /// CRC-32 stored in the table.
+    pub crc32: u32,
+    /// Whether the section's bytes match the stored CRC-32.
+    pub checksum_ok: bool,
+    /// Whether this reader knows the tag (unknown sections are skipped by [`read`]).
+    pub known: bool,
+}
+
+/// A material: what `inspect` shows and what submeshes name.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Material {
+    /// Unique name, matched by [`crate::Submesh::material`].
+    pub name: String,
+    /// Base colour RGBA, linear.
+    pub base_color: [f32; 4],
+    /// Path or URI of the colour texture, if any.
+    pub texture: Option<String>,
+}
+
+/// What the simplifier reached for one LOD, beyond [`Lod::error`] (the relative error).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodInfo {
+    /// Requested fraction of LOD 0's triangles.
+    pub target_ratio: f32,
+    /// Fraction of LOD 0's triangles actually kept.
+    pub reached_ratio: f32,
+    /// Simplifier error in model units.
+    pub error_model: f32,
+    /// True when the error limit stopped the simplifier before the target.
+    pub stopped_by_error_limit: bool,
+}
+
+impl Default for LodInfo {
+    /// The values of an unsimplified LOD 0: both ratios 1, no error.
+    fn default() -> Self {
+        Self {
+            target_ratio: 1.0,
+            reached_ratio: 1.0,
+            error_model: 0.0,
+            stopped_by_error_limit: false,
+        }
+    }
+}
+
+/// Everything a `.sinew` file holds. Any part may be empty: a file may hold a skeleton and meshes, or
+/// clips alone (a motion file bound by joint name to other rigs).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Asset {
+    /// The skeleton mesh joint indices refer to, if any.
+    pub skeleton: Option<Skeleton>,
+    /// Materials named by submeshes.
+    pub materials: Vec<Material>,
+    /// Meshes; each has at least one LOD.
+    pub meshes: Vec<Mesh>,
+    /// Per mesh, per LOD: simplifier figures. May be shorter than `meshes` (or than a mesh's LODs) when
+    /// writing; missing entries are written as [`LodInfo::default`]. [`read`] always fills it completely.
+    pub lod_info: Vec<Vec<LodInfo>>,
+    /// Clips; their tracks name joints, which need not exist in `skeleton`.
+    pub clips: Vec<Clip>,
+}
+
+impl Asset {
+    /// The figures of LOD `lod` of mesh `mesh` (defaults when `lod_info` has no entry).
+    pub fn lod_info(&self, mesh: usize, lod: usize) -> LodInfo {
+        self.lod_info
+            .get(mesh)
+            .and_then(|m| m.get(lod))
+            .copied()
+            .unwrap_or_default()
+    }
+}
+
+/// Checks everything [`read`] checks on decoded data, so that whatever [`write`] accepts reads back.
+///
+/// Rules: every mesh has at least one LOD; per LOD, normals/UVs/joints are empty or one per vertex,
+/// joints and weights come together, the index count is a multiple of three, every index is below the
+/// vertex count, every joint index is below the skeleton's joint count (when there is a skeleton),
+/// submesh ranges lie inside the index buffer, all floats are finite, and counts fit in 32 bits.
+/// Material colours, LOD figures and clip sample rates are finite; `lod_info` is no longer than the
+/// meshes and LODs it describes.
+pub fn validate(asset: &Asset) -> Result<(), FormatError> {
+    let joints = asset.skeleton.as_ref().map(Skeleton::len);
+    for m in &asset.materials {
+        if !m.base_color.iter().all(|v| v.is_finite()) {
+            return Err(FormatError::invalid(
+                "MATL",
+                None,
+                format!("material {:?}: non-finite base colour", m.name),
+            ));
+        }
+    }
+    if u32::try_from(asset.meshes.len()).is_err() {
+        return Err(FormatError::invalid(
+            "MESH",
+            None,
+            "more than 2^32-1 meshes",
+        ));
+    }
+    if asset.lod_info.len() > asset.meshes.len() {
+        return Err(FormatError::invalid(
+            "MESH",
+            None,
+            "lod_info has more entries than there are meshes",
+        ));
+    }
+    for (mi, mesh) in asset.meshes.iter().enumerate() {
+        if u32::try_from(mesh.lods.len()).is_err() {
+            return Err(FormatError::invalid(
+                "MESH",
+                None,
+                format!("mesh {:?} has more than 2^32-1 LODs", mesh.name),
+            ));
+        }
+        if mesh.lods.is_empty() {
+            return Err(FormatError::invalid(
+                "MESH",
+                None,
+                format!("mesh {:?} has no LODs", mesh.name),
+            ));
+        }
+        if asset
+            .lod_info
+            .get(mi)
+            .is_some_and(|l| l.len() > mesh.lods.len())
+        {
+            return Err(FormatError::invalid(
+                "MESH",
+                None,
+                format!("mesh {:?}: lod_info has more entries than LODs", mesh.name),
+            ));
+        }
+        for (li, lod) in mesh.lods.iter().enumerate() {
+            check_lod(lod, joints)
+                .map_err(|k| k.to_string())
+                .and_then(|()| check_lod_info(&asset.lod_info(mi, li)))
+                .map_err(|e| {
+                    FormatError::invalid(
+                        "MESH",
+                        None,
+                        format!("mesh {:?} LOD {li}: {e}", mesh.name),
+                    )
+                })?;
+        }
+    }
+    if u32::try_from(asset.clips.len()).is_err() || u32::try_from(asset.materials.len()).is_err() {
+        return Err(FormatError::invalid(
+            "file",
+            None,
+            "more than 2^32-1 clips or materials",
+        ));
+    }
+    for c in &asset.clips {
+        let fits = |n: usize| u32::try_from(n).is_ok();
+        if !fits(c.times().len()) || !fits(c.tracks().len()) || !fits(c.stride()) {
+            return Err(FormatError::invalid(
+                "CLIP",
+                None,
+                format!("clip {:?}: a count does not fit in 32 bits", c.name()),
+            ));
+        }
+        if !c.sample_rate().is_finite() {
+            return Err(FormatError::invalid(
+                "CLIP",
+                None,
+                format!("clip {:?}: non-finite sample rate", c.name()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_lod_info(info: &LodInfo) -> Result<(), String> {
+    if [info.target_ratio, info.reached_ratio, info.error_model]
+        .iter()
+        .all(|v| v.is_finite())
+    {
+        Ok(())
+    } else {
+        Err("non-finite LOD figures".into())
+    }
+}
+
+/// The per-LOD rules of [`validate`], as the kind of error the reader reports at the LOD's offset.
+pub(crate) fn check_lod(lod: &Lod, joint_count: Option<usize>) -> Result<(), FormatErrorKind> {
+    let n = lod.positions.len();
+    if u32::try_from(n).is_err()
+        || u32::try_from(lod.indices.len()).is_err()
+        || u32::try_from(lod.submeshes.len()).is_err()
+    {
+        return Err(FormatErrorKind::Invalid(
+            "a count does not fit in 32 bits".into(),
+        ));
+    }
+    for (what, len) in [
+        ("normals", lod.normals.len()),
+        ("uvs", lod.uvs.len()),
+        ("joints", lod.joints.len()),
+        ("weights", lod.weights.len()),
+    ] {
+        if len != 0 && len != n {
+            return Err(FormatErrorKind::Invalid(format!(
+                "{len} {what} for {n} vertices"
+            )));
+        }
+    }
+    if lod.joints.len() != lod.weights.len() {
+        return Err(FormatErrorKind::Invalid(
+            "joints and weights must both be present or both absent".into(),
+        ));
+    }
+    let non_finite = |what| Err(FormatErrorKind::NonFinite { what });
+    if !lod.error.is_finite() {
+        return non_finite("LOD error");
+    }
+    if !lod.positions.iter().all(|v| v.is_finite()) {
+        return non_finite("a position");
+    }
+    if !lod.normals.iter().all(|v| v.is_finite()) {
+        return non_finite("a normal");
+    }
+    if !lod.uvs.iter().all(|v| v.is_finite()) {
+        return non_finite("a uv");
+    }
+    if !lod.weights.iter().flatten().all(|v| v.is_finite()) {
+        return non_finite("a weight");
+    }
+    if lod.indices.len() % 3 != 0 {
+        return Err(FormatErrorKind::BadValue {
+            what: "index count (not a multiple of 3)",
+            value: lod.indices.len() as u64,
+        });
+    }
+    if let Some(&v) = lod.indices.iter().find(|&&v| v as usize >= n) {
+        return Err(FormatErrorKind::IndexOutOfRange {
+            what: "vertex",
+            index: v.into(),
+            limit: n as u64,
+        });
+    }
+    if let Some(limit) = joint_count {
+        if let Some(&j) = lod.joints.iter().flatten().find(|&&j| j as usize >= limit) {
+            return Err(FormatErrorKind::IndexOutOfRange {
+                what: "joint",
+                index: j.into(),
+                limit: limit as u64,
+            });
+        }
+    }
+    for s in &lod.submeshes {
+        let end = u64::from(s.first_index) + u64::from(s.index_count);
+        if end > lod.indices.len() as u64 {
+            return Err(FormatErrorKind::IndexOutOfRange {
+                what: "submesh end index",
+                index: end,
+                limit: lod.indices.len() as u64,
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,359 @@
+//! The `.sinew` writer. Layout: docs/format.md.
+
+use super::{
+    validate, Asset, FormatError, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR,
+};
+use crate::clip::Channel;
+use crate::{Clip, Mesh, Skeleton};
+use std::collections::HashMap;
+
+/// Encodes an asset as a `.sinew` file, version 1.0.
+///
+/// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
+/// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
+/// reads back equal.
+pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
+    validate(asset)?;
+    let mut strings = Strings::default();
+    let mut sections: Vec<(Tag, Vec<u8>)> = Vec::new();
+    if let Some(s) = &asset.skeleton {
+        sections.push((Tag::SKELETON, skeleton(s, &mut strings)));
+    }
+    if !asset.materials.is_empty() {
+        sections.push((Tag::MATERIALS, materials(&asset.materials, &mut strings)));
+    }
+    if !asset.meshes.is_empty() {
+        sections.push((Tag::MESHES, meshes(asset, &mut strings)));
+    }
+    if !asset.clips.is_empty() {
+        sections.push((Tag::CLIPS, clips(&asset.clips, &mut strings)));
+    }
+    sections.insert(0, (Tag::STRINGS, strings.encode()?));
+    Ok(assemble(&sections))
+}
+
+/// Header, section table, then each section at the next multiple of [`ALIGN`], zero padding between.
+pub(crate) fn assemble(sections: &[(Tag, Vec<u8>)]) -> Vec<u8> {
+    let table_offset = HEADER_SIZE;
+    let mut offset = pad_to(table_offset + sections.len() * SECTION_ENTRY_SIZE);
+    let mut end = offset;
+    let mut table = Buf::default();
+    for (tag, body) in sections {
+        table.bytes(&tag.0);
+        table.u32(SECTION_VERSION);
+        table.u64(offset as u64);
+        table.u64(body.len() as u64);
+        table.u32(crc32fast::hash(body));
+        table.u32(0);
+        end = offset + body.len();
+        offset = pad_to(end);
+    }
+    // The file ends with the last section: no padding after it.
+    let file_size = end;
+    let mut out = Buf::default();
+    out.bytes(&MAGIC);
+    out.u16(VERSION_MAJOR);
+    out.u16(VERSION_MINOR);
+    out.u32(0); // flags
+    out.u64(file_size as u64);
+    out.u64(table_offset as u64);
+    out.u32(sections.len() as u32);
+    out.u32(SECTION_ENTRY_SIZE as u32);
+    out.u32(0); // reserved
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(&out.0);
+    crc.update(&table.0);
+    out.u32(crc.finalize());
+    out.bytes(&table.0);
+    for (_, body) in sections {
+        out.align();
+        out.bytes(body);
+    }
+    debug_assert_eq!(out.0.len(), file_size);
+    out.0
+}
+
+fn pad_to(n: usize) -> usize {
+    n.div_ceil(ALIGN) * ALIGN
+}
+
+/// A little-endian byte buffer.
+#[derive(Default)]
+pub(crate) struct Buf(pub(crate) Vec<u8>);
+
+impl Buf {
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
+        self.0.extend_from_slice(b);
+    }
+    pub(crate) fn u16(&mut self, v: u16) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn u32(&mut self, v: u32) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn f32(&mut self, v: f32) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn f32s(&mut self, v: &[f32]) {
+        for &x in v {
+            self.f32(x);
+        }
+    }
+    pub(crate) fn zeros(&mut self, n: usize) {
+        self.0.resize(self.0.len() + n, 0);
+    }
+    /// Zero padding up to the next multiple of [`ALIGN`].
+    pub(crate) fn align(&mut self) {
+        let n = pad_to(self.0.len()) - self.0.len();
+        self.zeros(n);
+    }
+}
+
+/// The string table under construction: strings in first-use order, each stored once.
+#[derive(Default)]
+struct Strings {
+    list: Vec<String>,
+    index: HashMap<String, u32>,
+}
+
+impl Strings {
+    fn get(&mut self, s: &str) -> u32 {
+        if let Some(&i) = self.index.get(s) {
+            return i;
+        }
+        let i = self.list.len() as u32;
+        self.list.push(s.to_owned());
+        self.index.insert(s.to_owned(), i);
+        i
+    }
+
+    fn encode(&self) -> Result<Vec<u8>, FormatError> {
+        let total: usize = self.list.iter().map(String::len).sum();
+        let too_big = || FormatError::invalid("STRS", None, "string data exceeds 4 GiB");
+        let count = u32::try_from(self.list.len()).map_err(|_| too_big())?;
+        let data_size = u32::try_from(total).map_err(|_| too_big())?;
+        let mut b = Buf::default();
+        b.u32(count);
+        b.u32(data_size);
+        b.zeros(8);
+        let mut at = 0u32;
+        for s in &self.list {
+            b.u32(at);
+            b.u32(s.len() as u32);
+            at += s.len() as u32;
+        }
+        b.align();
+        for s in &self.list {
+            b.bytes(s.as_bytes());
+        }
+        Ok(b.0)
+    }
+}
+
+fn skeleton(s: &Skeleton, strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    b.u32(s.len() as u32);
+    b.zeros(12);
+    for n in s.names() {
+        b.u32(strings.get(n));
+    }
+    b.align();
+    for p in s.parents() {
+        b.u16(p.unwrap_or(NO_PARENT));
+    }
+    b.align();
+    for t in s.bind_local() {
+        b.f32s(&t.translation.to_array());
+        b.f32s(&t.rotation.to_array());
+        b.f32s(&t.scale.to_array());
+    }
+    b.align();
+    for m in s.inverse_bind() {
+        b.f32s(&m.to_cols_array());
+    }
+    b.0
+}
+
+/// Bytes of one material record in version 1.
+pub(crate) const MATERIAL_RECORD: usize = 32;
+
+fn materials(list: &[Material], strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    b.u32(list.len() as u32);
+    b.u32(MATERIAL_RECORD as u32);
+    b.zeros(8);
+    for m in list {
+        b.u32(strings.get(&m.name));
+        b.u32(m.texture.as_deref().map_or(NO_STRING, |t| strings.get(t)));
+        b.f32s(&m.base_color);
+        b.zeros(8);
+    }
+    b.0
+}
+
+/// Bytes of the LOD metadata record in version 1.
+pub(crate) const LOD_META_RECORD: usize = 32;
+/// Attribute bit: normals present.
+pub(crate) const ATTR_NORMALS: u32 = 1;
+/// Attribute bit: UVs present.
+pub(crate) const ATTR_UVS: u32 = 2;
+/// Attribute bit: joints and weights present.
+pub(crate) const ATTR_SKIN: u32 = 4;
+
+fn meshes(asset: &Asset, strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    b.u32(asset.meshes.len() as u32);
+    b.zeros(12);
+    for (mi, mesh) in asset.meshes.iter().enumerate() {
+        mesh_record(&mut b, asset, mi, mesh, strings);
+    }
+    b.0
+}
+
+fn mesh_record(b: &mut Buf, asset: &Asset, mi: usize, mesh: &Mesh, strings: &mut Strings) {
+    b.align();
+    b.u32(strings.get(&mesh.name));
+    b.u32(mesh.lods.len() as u32);
+    b.zeros(8);
+    for (li, lod) in mesh.lods.iter().enumerate() {
+        let info = asset.lod_info(mi, li);
+        let mut attributes = 0;
+        if !lod.normals.is_empty() {
+            attributes |= ATTR_NORMALS;
+        }
+        if !lod.uvs.is_empty() {
+            attributes |= ATTR_UVS;
+        }
+        if !lod.joints.is_empty() {
+            attributes |= ATTR_SKIN;
+        }
+        b.align();
+        b.u32(lod.positions.len() as u32);
+        b.u32(attributes);
+        b.u32(lod.indices.len() as u32);
+        b.u32(lod.submeshes.len() as u32);
+        b.u32(LOD_META_RECORD as u32);
+        b.zeros(12);
+        b.f32(lod.error);
+        b.f32(info.target_ratio);
+        b.f32(info.reached_ratio);
+        b.f32(info.error_model);
+        b.u32(u32::from(info.stopped_by_error_limit));
+        b.zeros(12);
+        b.align();
+        for p in &lod.positions {
+            b.f32s(&p.to_array());
+        }
+        if !lod.normals.is_empty() {
+            b.align();
+            for n in &lod.normals {
+                b.f32s(&n.to_array());
+            }
+        }
+        if !lod.uvs.is_empty() {
+            b.align();
+            for uv in &lod.uvs {
+                b.f32s(&uv.to_array());
+            }
+        }
+        if !lod.joints.is_empty() {
+            b.align();
+            for js in &lod.joints {
+                for &j in js {
+                    b.u16(j);
+                }
+            }
+            b.align();
+            for ws in &lod.weights {
+                b.f32s(ws);
+            }
+        }
+        b.align();
+        for &i in &lod.indices {
+            b.u32(i);
+        }
+        b.align();
+        for s in &lod.submeshes {
+            b.u32(s.first_index);
+            b.u32(s.index_count);
+            b.u32(strings.get(&s.material));
+            b.u32(0);
+        }
+    }
+}
+
+/// Bytes of one track record in version 1.
+pub(crate) const TRACK_RECORD: usize = 64;
+/// Channel kind: not stored, bind value.
+pub(crate) const KIND_BIND: u8 = 0;
+/// Channel kind: one constant value.
+pub(crate) const KIND_CONSTANT: u8 = 1;
+/// Channel kind: animated, at a float offset in every frame.
+pub(crate) const KIND_ANIMATED: u8 = 2;
+/// Channel encoding: plain little-endian f32.
+pub(crate) const ENCODING_F32: u8 = 0;
+/// Clip flag: looping.
+pub(crate) const CLIP_LOOPING: u32 = 1;
+/// Clip flag: additive.
+pub(crate) const CLIP_ADDITIVE: u32 = 2;
+
+fn channel(b: &mut Buf, kind: u8, payload: [u32; 4]) {
+    b.bytes(&[kind, ENCODING_F32, 0, 0]);
+    for p in payload {
+        b.u32(p);
+    }
+}
+
+fn vec_channel(b: &mut Buf, c: Channel<glam::Vec3>) {
+    match c {
+        Channel::Bind => channel(b, KIND_BIND, [0; 4]),
+        Channel::Constant(v) => channel(b, KIND_CONSTANT, [v.x, v.y, v.z, 0.0].map(f32::to_bits)),
+        Channel::Animated(o) => channel(b, KIND_ANIMATED, [o, 0, 0, 0]),
+    }
+}
+
+fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    b.u32(list.len() as u32);
+    b.u32(TRACK_RECORD as u32);
+    b.zeros(8);
+    for c in list {
+        b.align();
+        let mut flags = 0;
+        if c.looping() {
+            flags |= CLIP_LOOPING;
+        }
+        if c.additive() {
+            flags |= CLIP_ADDITIVE;
+        }
+        b.u32(strings.get(c.name()));
+        b.u32(flags);
+        b.f32(c.duration());
+        b.f32(c.sample_rate());
+        b.u32(c.times().len() as u32);
+        b.u32(c.stride() as u32);
+        b.u32(c.tracks().len() as u32);
+        b.u32(0);
+        b.f32s(c.times());
+        b.align();
+        for t in c.tracks() {
+            b.u32(strings.get(&t.joint));
+            vec_channel(&mut b, t.translation);
+            match t.rotation {
+                Channel::Bind => channel(&mut b, KIND_BIND, [0; 4]),
+                Channel::Constant(q) => {
+                    channel(&mut b, KIND_CONSTANT, q.to_array().map(f32::to_bits))
+                }
+                Channel::Animated(o) => channel(&mut b, KIND_ANIMATED, [o, 0, 0, 0]),
+            }
+            vec_channel(&mut b, t.scale);
+        }
+        b.align();
+        b.f32s(c.frames());
+    }
+    b.0
+}

@@ -1,0 +1,279 @@
+//! Local-to-model transforms, the skinning palette, and linear blend skinning.
+//!
+//! These are the functions the runtime, the baker and the verifier all call, so that a bake checked
+//! against the runtime is a bit-for-bit comparison. Every function has a fixed order of floating-point
+//! operations: no reassociation, no runtime-selected code path (glam's SIMD is chosen at compile time),
+//! no threading inside. The same inputs give the same bits on every call.
+//!
+//! Inputs are validated up front (lengths, parent order, joint indices); a bad input is a
+//! [`SkinError`], never a panic. On a joint-index error [`skin`] has already written the vertices before
+//! the offending one; all other errors are reported before anything is written.
+
+use crate::skeleton::JointIndex;
+use crate::{Lod, Transform, MAX_INFLUENCES};
+use glam::{Mat4, Vec3, Vec3A, Vec4};
+
+/// Why a skinning step was refused.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SkinError {
+    /// Two buffers that must be parallel differ in length.
+    #[error("{what} has {got} elements; expected {expected}")]
+    Length {
+        /// Which buffer.
+        what: &'static str,
+        /// Elements expected.
+        expected: usize,
+        /// Elements given.
+        got: usize,
+    },
+    /// A joint's parent does not come before it.
+    #[error("joint {joint} has parent {parent}, which does not come before it")]
+    ParentOrder {
+        /// The child.
+        joint: usize,
+        /// Its parent index.
+        parent: usize,
+    },
+    /// A vertex names a joint outside the palette.
+    #[error("vertex {vertex} uses joint {joint}, but the palette has {palette} matrices")]
+    JointIndex {
+        /// The vertex.
+        vertex: usize,
+        /// The joint index it names.
+        joint: u16,
+        /// Matrices in the palette.
+        palette: usize,
+    },
+}
+
+fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinError> {
+    if expected == got {
+        Ok(())
+    } else {
+        Err(SkinError::Length {
+            what,
+            expected,
+            got,
+        })
+    }
+}
+
+/// Model-space matrices from local transforms: `models[i] = models[parent(i)] * locals[i].to_mat4()`,
+/// or `locals[i].to_mat4()` for a root. Parents must come before their children (as in a
+/// [`Skeleton`](crate::Skeleton)).
+pub fn local_to_model(
+    parents: &[Option<JointIndex>],
+    locals: &[Transform],
+    models: &mut [Mat4],
+) -> Result<(), SkinError> {
+    let n = parents.len();
+    same_len("locals", n, locals.len())?;
+    same_len("models", n, models.len())?;
+    for (i, p) in parents.iter().enumerate() {
+        if let Some(p) = *p {
+            if p as usize >= i {
+                return Err(SkinError::ParentOrder {
+                    joint: i,
+                    parent: p as usize,
+                });
+            }
+        }
+    }
+    for i in 0..n {
+        let local = locals[i].to_mat4();
+        models[i] = match parents[i] {
+            // `p < i` was checked above.
+            Some(p) => models[p as usize] * local,
+            None => local,
+        };
+    }
+    Ok(())
+}
+
+/// The skinning palette: `palette[i] = models[i] * inverse_bind[i]`, which moves a bind-pose
+/// model-space point to where joint `i` carries it now.
+pub fn skinning_palette(
+    models: &[Mat4],
+    inverse_bind: &[Mat4],
+    palette: &mut [Mat4],
+) -> Result<(), SkinError> {
+    same_len("inverse bind matrices", models.len(), inverse_bind.len())?;
+    same_len("palette", models.len(), palette.len())?;
+    for ((m, ib), out) in models.iter().zip(inverse_bind).zip(palette.iter_mut()) {
+        *out = *m * *ib;
+    }
+    Ok(())
+}
+
+/// Linear blend skinning of positions and normals with four influences per vertex.
+///
+/// For vertex `v` with joints `j` and weights `w`, the blended matrix is, column by column and in this
+/// order, `((P[j0]*w0 + P[j1]*w1) + P[j2]*w2) + P[j3]*w3` (only the upper 3x4 part is used; the palette's
+/// bottom row is assumed to be `0 0 0 1`).
+///
+/// - **Positions**: `M * (x, y, z, 1)`.
+/// - **Normals**: transformed by the *cofactor* matrix of `M`'s 3x3 part `A` (columns `a0 a1 a2`):
+///   `n' = n.x*(a1×a2) + n.y*(a2×a0) + n.z*(a0×a1)`, negated when `det A < 0`, then normalised. That is
+///   the inverse-transpose up to a positive factor, which renormalisation removes, so normals stay
+///   perpendicular to the surface under non-uniform scale and mirroring, without a matrix inverse. A
+///   normal that ends up zero-length (degenerate matrix or zero input) is written as zero.
+/// - **Zero weights are included**: all four influences are always blended (a weight of 0 adds
+///   exactly `0 * P[j]`), so the loop has no data-dependent branch and the operation order never
+///   changes. Consequently all four joint indices of every vertex must be valid, even with weight 0.
+///   Weights are used as given; they are not renormalised.
+///
+/// `normals` and `out_normals` may both be empty to skin positions only; otherwise every per-vertex
+/// slice must have the same length as `positions`.
+pub fn skin(
+    palette: &[Mat4],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    joints: &[[u16; MAX_INFLUENCES]],
+    weights: &[[f32; MAX_INFLUENCES]],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) -> Result<(), SkinError> {
+    let n = positions.len();
+    same_len("joints", n, joints.len())?;
+    same_len("weights", n, weights.len())?;
+    same_len("output positions", n, out_positions.len())?;
+    let with_normals = !(normals.is_empty() && out_normals.is_empty());
+    if with_normals {
+        same_len("normals", n, normals.len())?;
+        same_len("output normals", n, out_normals.len())?;
+    }
+    let weights = &weights[..n];
+    let out_positions = &mut out_positions[..n];
+    if with_normals {
+        let normals = &normals[..n];
+        let out_normals = &mut out_normals[..n];
+        for v in 0..n {
+            let m = blend(palette, &joints[v], &weights[v], v)?;
+            out_positions[v] = transform_point(&m, positions[v]);
+            out_normals[v] = transform_normal(&m, normals[v]);
+        }
+    } else {
+        for v in 0..n {
+            let m = blend(palette, &joints[v], &weights[v], v)?;
+            out_positions[v] = transform_point(&m, positions[v]);
+        }
+    }
+    Ok(())
+}
+
+/// Skins one LOD's positions and normals with [`skin`]. A LOD without normals skins positions only
+/// (pass an empty `out_normals`). A static LOD (no joints) is a [`SkinError::Length`] on `joints`.
+pub fn skin_lod(
+    palette: &[Mat4],
+    lod: &Lod,
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) -> Result<(), SkinError> {
+    skin(
+        palette,
+        &lod.positions,
+        &lod.normals,
+        &lod.joints,
+        &lod.weights,
+        out_positions,
+        out_normals,
+    )
+}
+
+/// The blended matrix's four columns (x, y, z axes and translation).
+#[inline(always)]
+fn blend(
+    palette: &[Mat4],
+    j: &[u16; MAX_INFLUENCES],
+    w: &[f32; MAX_INFLUENCES],
+    vertex: usize,
+) -> Result<[Vec4; 4], SkinError> {
+    let bad = |joint: u16| SkinError::JointIndex {
+        vertex,
+        joint,
+        palette: palette.len(),
+    };
+    let m0 = palette.get(j[0] as usize).ok_or_else(|| bad(j[0]))?;
+    let m1 = palette.get(j[1] as usize).ok_or_else(|| bad(j[1]))?;
+    let m2 = palette.get(j[2] as usize).ok_or_else(|| bad(j[2]))?;
+    let m3 = palette.get(j[3] as usize).ok_or_else(|| bad(j[3]))?;
+    let (w0, w1, w2, w3) = (w[0], w[1], w[2], w[3]);
+    Ok([
+        m0.x_axis * w0 + m1.x_axis * w1 + m2.x_axis * w2 + m3.x_axis * w3,
+        m0.y_axis * w0 + m1.y_axis * w1 + m2.y_axis * w2 + m3.y_axis * w3,
+        m0.z_axis * w0 + m1.z_axis * w1 + m2.z_axis * w2 + m3.z_axis * w3,
+        m0.w_axis * w0 + m1.w_axis * w1 + m2.w_axis * w2 + m3.w_axis * w3,
+    ])
+}
+
+#[inline(always)]
+fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
+    (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
+}
+
+#[inline(always)]
+fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
+    let a0 = Vec3A::from_vec4(m[0]);
+    let a1 = Vec3A::from_vec4(m[1]);
+    let a2 = Vec3A::from_vec4(m[2]);
+    let c0 = a1.cross(a2);
+    let c1 = a2.cross(a0);
+    let c2 = a0.cross(a1);
+    let r = c0 * n.x + c1 * n.y + c2 * n.z;
+    let r = if a0.dot(c0) < 0.0 { -r } else { r };
+    Vec3::from(r.normalize_or_zero())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normals_under_non_uniform_scale_stay_perpendicular() {
+        // Scale x by 2: the plane x + y = 0 has normal (1,1,0)/√2; after scaling x the plane is
+        // x/2 + y = 0, normal (1,2,0)/√5 (up to length).
+        let palette = [Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0))];
+        let mut p = [Vec3::ZERO];
+        let mut n = [Vec3::ZERO];
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        skin(
+            &palette,
+            &[Vec3::new(1.0, -1.0, 0.0)],
+            &[Vec3::new(s, s, 0.0)],
+            &[[0; 4]],
+            &[[1.0, 0.0, 0.0, 0.0]],
+            &mut p,
+            &mut n,
+        )
+        .unwrap();
+        assert_eq!(p[0], Vec3::new(2.0, -1.0, 0.0));
+        let e = Vec3::new(1.0, 2.0, 0.0) / 5f32.sqrt();
+        assert!((n[0] - e).length() < 1e-6, "{}", n[0]);
+        // Mirroring keeps the normal outward-facing relative to the mirrored surface.
+        let palette = [Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0))];
+        skin(
+            &palette,
+            &[Vec3::X],
+            &[Vec3::X],
+            &[[0; 4]],
+            &[[1.0, 0.0, 0.0, 0.0]],
+            &mut p,
+            &mut n,
+        )
+        .unwrap();
+        assert_eq!(n[0], Vec3::new(-1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn rejects_parents_after_children() {
+        let mut m = [Mat4::IDENTITY; 2];
+        let e = local_to_model(&[Some(1), None], &[Transform::IDENTITY; 2], &mut m);
+        assert_eq!(
+            e,
+            Err(SkinError::ParentOrder {
+                joint: 0,
+                parent: 1
+            })
+        );
+    }
+}

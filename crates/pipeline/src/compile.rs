@@ -1,0 +1,260 @@
+//! Compiling a [`Scene`] into the runtime [`Asset`] that `sinew_core::format` writes as `.sinew` bytes.
+//!
+//! - The skeleton is kept as it is.
+//! - Each scene mesh becomes a core [`Mesh`] whose LOD 0 is the imported geometry and whose further LODs
+//!   are the generated ones, most detailed first. A generated LOD's `error_relative` becomes the core
+//!   [`sinew_core::Lod::error`]; its ratios, model-unit error and stop reason go to
+//!   [`Asset::lod_info`]. LOD 0 gets [`LodInfo::default`] (ratios 1, no error).
+//! - Each [`sinew_scene::SceneClip`] becomes a [`Clip`] through [`Clip::from_curves`], which keeps every
+//!   source key time, so sampling the compiled clip at a source key gives the source value exactly.
+//! - Materials are copied.
+//!
+//! The result is checked with [`format::validate`], so compiling succeeds exactly when writing will.
+
+use sinew_core::format::{self, Asset, FormatError, LodInfo, Material};
+use sinew_core::{Clip, ClipError, Mesh};
+use sinew_scene::Scene;
+
+/// Why a scene could not be compiled.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CompileError {
+    /// A clip's curves do not make a valid clip.
+    #[error("clip {clip:?}: {source}")]
+    Clip {
+        /// The clip's name.
+        clip: String,
+        /// What is wrong with it.
+        source: ClipError,
+    },
+    /// The compiled asset breaks a rule of the format (a mesh index out of range, a non-finite value…).
+    #[error(transparent)]
+    Format(#[from] FormatError),
+}
+
+/// Compiles a scene into a runtime asset. Deterministic: the same scene gives the same asset.
+pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
+    let mut meshes = Vec::with_capacity(scene.meshes.len());
+    let mut lod_info = Vec::with_capacity(scene.meshes.len());
+    for m in &scene.meshes {
+        let mut lods = Vec::with_capacity(1 + m.lods.len());
+        let mut info = Vec::with_capacity(1 + m.lods.len());
+        lods.push(m.geometry.clone());
+        info.push(LodInfo::default());
+        for g in &m.lods {
+            lods.push(sinew_core::Lod {
+                error: g.error_relative,
+                ..g.lod.clone()
+            });
+            info.push(LodInfo {
+                target_ratio: g.target_ratio,
+                reached_ratio: g.reached_ratio,
+                error_model: g.error_model,
+                stopped_by_error_limit: g.stopped_by_error_limit,
+            });
+        }
+        meshes.push(Mesh {
+            name: m.name.clone(),
+            lods,
+        });
+        lod_info.push(info);
+    }
+    let clips = scene
+        .clips
+        .iter()
+        .map(|c| {
+            Clip::from_curves(
+                c.name.clone(),
+                c.duration,
+                c.sample_rate,
+                c.looping,
+                c.additive,
+                c.tracks.clone(),
+            )
+            .map_err(|source| CompileError::Clip {
+                clip: c.name.clone(),
+                source,
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let materials = scene
+        .materials
+        .iter()
+        .map(|m| Material {
+            name: m.name.clone(),
+            base_color: m.base_color,
+            texture: m.texture.clone(),
+        })
+        .collect();
+    let asset = Asset {
+        skeleton: scene.skeleton.clone(),
+        materials,
+        meshes,
+        lod_info,
+        clips,
+    };
+    format::validate(&asset)?;
+    Ok(asset)
+}
+
+/// Compiles a scene and encodes it as `.sinew` bytes.
+pub fn compile_to_bytes(scene: &Scene) -> Result<Vec<u8>, CompileError> {
+    Ok(format::write(&compile(scene)?)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sinew_core::glam::{Quat, Vec3};
+    use sinew_core::{Curve, JointDesc, Lod, Submesh, TrackCurves, Transform};
+    use sinew_scene::{GeneratedLod, SceneClip, SourceFormat};
+
+    fn scene() -> Scene {
+        let (skeleton, _) = sinew_core::Skeleton::from_unordered(vec![
+            JointDesc {
+                name: "hips".into(),
+                parent: None,
+                bind_local: Transform::from_translation(Vec3::Y),
+                inverse_bind: None,
+            },
+            JointDesc {
+                name: "leg".into(),
+                parent: Some("hips".into()),
+                bind_local: Transform::from_translation(-Vec3::Y * 0.5),
+                inverse_bind: None,
+            },
+        ])
+        .unwrap();
+        let tri = |scale: f32| Lod {
+            positions: vec![Vec3::ZERO, Vec3::X * scale, Vec3::Y * scale],
+            normals: vec![Vec3::Z; 3],
+            joints: vec![[0, 1, 0, 0]; 3],
+            weights: vec![[0.5, 0.5, 0.0, 0.0]; 3],
+            indices: vec![0, 1, 2],
+            submeshes: vec![Submesh {
+                first_index: 0,
+                index_count: 3,
+                material: "mat".into(),
+            }],
+            ..Default::default()
+        };
+        let mut s = Scene::new(SourceFormat::Gltf);
+        s.skeleton = Some(skeleton);
+        s.meshes.push(sinew_scene::Mesh {
+            name: "legs".into(),
+            geometry: tri(1.0),
+            source_vertex: vec![0, 1, 2],
+            source_vertex_count: 3,
+            lods: vec![GeneratedLod {
+                lod: tri(2.0),
+                target_ratio: 0.5,
+                reached_ratio: 1.0,
+                error_relative: 0.25,
+                error_model: 0.5,
+                stopped_by_error_limit: true,
+            }],
+        });
+        s.materials.push(sinew_scene::Material {
+            name: "mat".into(),
+            base_color: [0.5, 0.25, 1.0, 1.0],
+            texture: Some("a.png".into()),
+        });
+        s.clips.push(SceneClip {
+            name: "kick".into(),
+            duration: 1.0,
+            sample_rate: 10.0,
+            looping: false,
+            additive: false,
+            tracks: vec![TrackCurves {
+                joint: "leg".into(),
+                rotation: Curve::new(
+                    vec![0.0, 0.4, 1.0],
+                    vec![
+                        Quat::IDENTITY,
+                        Quat::from_xyzw(1.0, 0.0, 0.0, 0.0),
+                        Quat::IDENTITY,
+                    ],
+                ),
+                translation: Curve::new(vec![0.2], vec![Vec3::new(0.0, -0.5, 0.0)]),
+                ..Default::default()
+            }],
+        });
+        s
+    }
+
+    #[test]
+    fn compiles_lods_materials_and_clips() {
+        let asset = compile(&scene()).unwrap();
+        assert_eq!(asset.skeleton.as_ref().unwrap().names(), ["hips", "leg"]);
+        let m = &asset.meshes[0];
+        assert_eq!(m.name, "legs");
+        assert_eq!(m.lods.len(), 2);
+        assert_eq!(m.lods[0].error, 0.0);
+        assert_eq!(m.lods[1].positions[1], Vec3::X * 2.0);
+        assert_eq!(m.lods[1].error, 0.25);
+        assert_eq!(asset.lod_info[0][0], LodInfo::default());
+        assert_eq!(
+            asset.lod_info[0][1],
+            LodInfo {
+                target_ratio: 0.5,
+                reached_ratio: 1.0,
+                error_model: 0.5,
+                stopped_by_error_limit: true
+            }
+        );
+        assert_eq!(asset.materials[0].texture.as_deref(), Some("a.png"));
+        let c = &asset.clips[0];
+        assert_eq!(c.name(), "kick");
+        assert_eq!(c.times(), [0.0, 0.4, 1.0]);
+        assert_eq!(c.stride(), 4);
+        assert_eq!(&c.frames()[4..8], &[1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(
+            c.tracks()[0].translation,
+            sinew_core::Channel::Constant(Vec3::new(0.0, -0.5, 0.0))
+        );
+    }
+
+    #[test]
+    fn bytes_read_back_to_the_compiled_asset() {
+        let bytes = compile_to_bytes(&scene()).unwrap();
+        let back = format::read(&bytes).unwrap();
+        assert_eq!(back, compile(&scene()).unwrap());
+        assert_eq!(compile_to_bytes(&scene()).unwrap(), bytes);
+    }
+
+    #[test]
+    fn scene_survives_compile_write_import_compile() {
+        let bytes = compile_to_bytes(&scene()).unwrap();
+        let no_files =
+            |_: &str| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
+        let back =
+            sinew_import::sinew::import("t.sinew", &bytes, &no_files, &Default::default()).unwrap();
+        assert_eq!(back.source_format, SourceFormat::Sinew);
+        let g = &back.meshes[0].lods[0];
+        assert_eq!(
+            (g.target_ratio, g.error_relative, g.error_model),
+            (0.5, 0.25, 0.5)
+        );
+        assert_eq!(g.lod.positions, scene().meshes[0].lods[0].lod.positions);
+        assert_eq!(
+            back.clips[0].tracks[0].rotation,
+            scene().clips[0].tracks[0].rotation
+        );
+        // The constant translation comes back as one key at 0 instead of 0.2; it compiles the same.
+        assert_eq!(back.clips[0].tracks[0].translation.times, [0.0]);
+        assert_eq!(compile_to_bytes(&back).unwrap(), bytes);
+    }
+
+    #[test]
+    fn bad_clips_and_bad_meshes_are_errors() {
+        let mut s = scene();
+        s.clips[0].duration = 0.5;
+        assert!(matches!(
+            compile(&s),
+            Err(CompileError::Clip { clip, source: ClipError::BadDuration(_) }) if clip == "kick"
+        ));
+        let mut s = scene();
+        s.meshes[0].lods[0].lod.indices[2] = 3;
+        let e = compile(&s).unwrap_err();
+        assert!(e.to_string().contains("\"legs\" LOD 1"), "{e}");
+    }
+}

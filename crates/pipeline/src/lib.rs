@@ -2,4 +2,9 @@
 //! LOD generation, keyframe reduction and quantization, compiling a Scene into the `.sinew` runtime
 //! format, baking vertex caches and verifying them against the runtime.
 
+pub mod cache;
 pub mod compile;
+pub mod lod;
+pub mod mapping;
+pub mod retarget;
+pub mod split;

@@ -1,0 +1,598 @@
+//! Level-of-detail generation for (skinned) meshes, on meshoptimizer.
+//!
+//! Each LOD is simplified from the previous one (meshoptimizer's recommendation for chains), submesh by
+//! submesh so that material ranges survive, with:
+//! - attribute-aware collapses: normals and UVs weigh in the collapse cost;
+//! - skin awareness: each vertex also carries its displacement under two fixed test poses of the
+//!   skeleton (every joint turned 25 degrees about its local X, then about its local Z). Two vertices
+//!   whose influences differ move apart under those poses, so collapsing one into the other costs what
+//!   it would tear at runtime: bone boundaries are kept where they matter and cheap where they do not;
+//! - locks on material borders: a vertex whose position is also used by another submesh does not move,
+//!   so neighbouring submeshes still meet;
+//! - meshoptimizer's `RegularizeLight` option, which its author recommends for deforming meshes.
+//!
+//! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
+//! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
+//! then optimised for the vertex cache and its vertices reordered for fetch.
+//!
+//! meshoptimizer passes indices to C++ unchecked, so every buffer is validated before each call.
+
+use meshopt::{SimplifyOptions, SimplifyVertex};
+use sinew_core::glam;
+use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
+use sinew_scene::{GeneratedLod, Mesh, Scene};
+use std::collections::HashSet;
+
+/// What to build.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LodOptions {
+    /// Target fraction of LOD 0's triangles for each generated LOD, decreasing.
+    pub ratios: Vec<f32>,
+    /// Largest simplification error allowed, relative to the mesh extent, accumulated along the chain.
+    pub max_error: f32,
+    /// Influences per vertex kept in the lowest LOD (1 to 4).
+    pub lowest_lod_influences: usize,
+}
+
+impl Default for LodOptions {
+    fn default() -> Self {
+        Self {
+            ratios: vec![0.5, 0.25],
+            max_error: DEFAULT_MAX_ERROR,
+            lowest_lod_influences: MAX_INFLUENCES,
+        }
+    }
+}
+
+/// Default error limit: 5% of the mesh extent. A 25% LOD of a low-polygon character usually needs
+/// about this much; the error actually reached is always reported.
+pub const DEFAULT_MAX_ERROR: f32 = 0.05;
+
+/// Why LODs could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LodError {
+    /// A ratio outside (0, 1].
+    #[error("LOD ratio {0} is not in (0, 1]")]
+    BadRatio(f32),
+    /// Ratios not decreasing.
+    #[error("LOD ratios must decrease: {0:?}")]
+    RatiosNotDecreasing(Vec<f32>),
+    /// Error limit negative or not finite.
+    #[error("LOD error limit {0} must be a finite number >= 0")]
+    BadMaxError(f32),
+    /// Influence count outside 1..=4.
+    #[error("LOD influences must be 1 to 4, not {0}")]
+    BadInfluences(usize),
+    /// The mesh's buffers are inconsistent.
+    #[error("mesh {mesh:?}: {problem}")]
+    BadMesh {
+        /// Mesh name.
+        mesh: String,
+        /// What is wrong.
+        problem: String,
+    },
+}
+
+impl LodOptions {
+    /// Checks the options.
+    pub fn validate(&self) -> Result<(), LodError> {
+        let mut prev = 1.0f32;
+        for &r in &self.ratios {
+            if !(r > 0.0 && r <= 1.0) {
+                return Err(LodError::BadRatio(r));
+            }
+            if r > prev {
+                return Err(LodError::RatiosNotDecreasing(self.ratios.clone()));
+            }
+            prev = r;
+        }
+        if !(self.max_error.is_finite() && self.max_error >= 0.0) {
+            return Err(LodError::BadMaxError(self.max_error));
+        }
+        if !(1..=MAX_INFLUENCES).contains(&self.lowest_lod_influences) {
+            return Err(LodError::BadInfluences(self.lowest_lod_influences));
+        }
+        Ok(())
+    }
+}
+
+/// Checks that a LOD's buffers agree with each other: what meshoptimizer needs before any call.
+pub fn validate_lod(lod: &Lod) -> Result<(), String> {
+    let n = lod.positions.len();
+    if n > u32::MAX as usize {
+        return Err(format!("{n} vertices is more than 32-bit indices address"));
+    }
+    if lod.normals.len() != n {
+        return Err(format!("{} normals for {n} positions", lod.normals.len()));
+    }
+    if !lod.uvs.is_empty() && lod.uvs.len() != n {
+        return Err(format!("{} uvs for {n} positions", lod.uvs.len()));
+    }
+    if lod.joints.len() != lod.weights.len() || (!lod.joints.is_empty() && lod.joints.len() != n) {
+        return Err(format!(
+            "{} joint and {} weight sets for {n} positions",
+            lod.joints.len(),
+            lod.weights.len()
+        ));
+    }
+    if lod.indices.len() % 3 != 0 {
+        return Err(format!(
+            "{} indices is not a whole number of triangles",
+            lod.indices.len()
+        ));
+    }
+    if let Some(bad) = lod.indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {bad} refers past the {n} vertices"));
+    }
+    if !lod.positions.iter().all(|p| p.is_finite()) {
+        return Err("non-finite position".into());
+    }
+    let mut next = 0u32;
+    for s in &lod.submeshes {
+        if s.first_index != next || s.index_count % 3 != 0 {
+            return Err("submeshes do not cover the indices in order, by whole triangles".into());
+        }
+        next = s
+            .first_index
+            .checked_add(s.index_count)
+            .ok_or("submesh range overflows")?;
+    }
+    if next as usize != lod.indices.len() && !lod.submeshes.is_empty() {
+        return Err("submeshes do not cover every index".into());
+    }
+    Ok(())
+}
+
+/// Per-vertex attributes the simplifier weighs: normal (3), UV (2), displacement under two test poses (6).
+const ATTRIBUTE_COUNT: usize = 11;
+const NORMAL_WEIGHT: f32 = 0.5;
+const UV_WEIGHT: f32 = 0.5;
+const POSE_WEIGHT: f32 = 1.0;
+const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
+
+/// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
+fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
+    let turn = glam::Quat::from_axis_angle(axis, TEST_POSE_ANGLE_DEGREES.to_radians());
+    let locals: Vec<Transform> = skeleton
+        .bind_local()
+        .iter()
+        .map(|b| Transform {
+            rotation: b.rotation * turn,
+            ..*b
+        })
+        .collect();
+    let mut model: Vec<glam::Mat4> = Vec::with_capacity(locals.len());
+    for (i, l) in locals.iter().enumerate() {
+        let m = match skeleton.parents()[i] {
+            Some(p) => model[p as usize] * l.to_mat4(),
+            None => l.to_mat4(),
+        };
+        model.push(m);
+    }
+    let palette: Vec<glam::Mat4> = model
+        .iter()
+        .zip(skeleton.inverse_bind())
+        .map(|(m, ib)| *m * *ib)
+        .collect();
+    lod.positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            let mut out = glam::Vec3::ZERO;
+            for k in 0..MAX_INFLUENCES {
+                let w = lod.weights[v][k];
+                if w != 0.0 {
+                    if let Some(m) = palette.get(lod.joints[v][k] as usize) {
+                        out += m.transform_point3(*p) * w;
+                    }
+                }
+            }
+            out
+        })
+        .collect()
+}
+
+fn extent(positions: &[glam::Vec3]) -> f32 {
+    let (mut lo, mut hi) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
+    for p in positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if positions.is_empty() {
+        0.0
+    } else {
+        (hi - lo).max_element()
+    }
+}
+
+fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
+    let n = lod.positions.len();
+    let scale = extent(&lod.positions);
+    let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
+    let poses: Vec<Vec<glam::Vec3>> = match skeleton {
+        Some(s) if lod.is_skinned() && !s.is_empty() => [glam::Vec3::X, glam::Vec3::Z]
+            .iter()
+            .map(|&axis| posed_positions(lod, s, axis))
+            .collect(),
+        _ => Vec::new(),
+    };
+    let mut out = vec![0.0f32; n * ATTRIBUTE_COUNT];
+    for v in 0..n {
+        let a = &mut out[v * ATTRIBUTE_COUNT..(v + 1) * ATTRIBUTE_COUNT];
+        a[0..3].copy_from_slice(&lod.normals[v].to_array());
+        if let Some(uv) = lod.uvs.get(v) {
+            a[3..5].copy_from_slice(&uv.to_array());
+        }
+        for (k, pose) in poses.iter().enumerate() {
+            let d = (pose[v] - lod.positions[v]) * inv;
+            if d.is_finite() {
+                a[5 + 3 * k..8 + 3 * k].copy_from_slice(&d.to_array());
+            }
+        }
+    }
+    out
+}
+
+/// Vertices used by more than one submesh, by exact position: material borders, locked.
+fn border_locks(lod: &Lod) -> Vec<SimplifyVertex> {
+    let mut owner: std::collections::HashMap<[u32; 3], usize> = std::collections::HashMap::new();
+    let mut shared: HashSet<[u32; 3]> = HashSet::new();
+    let key = |p: glam::Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    for (s, sub) in lod.submeshes.iter().enumerate() {
+        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+        for &i in &lod.indices[range] {
+            let k = key(lod.positions[i as usize]);
+            match owner.get(&k) {
+                Some(&o) if o != s => {
+                    shared.insert(k);
+                }
+                Some(_) => {}
+                None => {
+                    owner.insert(k, s);
+                }
+            }
+        }
+    }
+    lod.positions
+        .iter()
+        .map(|p| {
+            if shared.contains(&key(*p)) {
+                SimplifyVertex::Lock
+            } else {
+                SimplifyVertex::None
+            }
+        })
+        .collect()
+}
+
+/// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
+/// Returns the new LOD (compacted and optimised) and the relative error of this step.
+fn simplify_step(
+    source: &Lod,
+    skeleton: Option<&Skeleton>,
+    target_triangles: usize,
+    max_error: f32,
+) -> (Lod, f32) {
+    let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
+    let attrs = attributes(source, skeleton);
+    let mut weights = [0.0f32; ATTRIBUTE_COUNT];
+    weights[0..3].fill(NORMAL_WEIGHT);
+    if !source.uvs.is_empty() {
+        weights[3..5].fill(UV_WEIGHT);
+    }
+    if source.is_skinned() && skeleton.is_some() {
+        weights[5..].fill(POSE_WEIGHT);
+    }
+    let locks = border_locks(source);
+    let total = source.triangle_count().max(1);
+    let mut indices = Vec::with_capacity(source.indices.len());
+    let mut submeshes = Vec::with_capacity(source.submeshes.len());
+    let mut worst = 0.0f32;
+    let whole = [Submesh {
+        first_index: 0,
+        index_count: source.indices.len() as u32,
+        material: String::new(),
+    }];
+    let subs: &[Submesh] = if source.submeshes.is_empty() {
+        &whole
+    } else {
+        &source.submeshes
+    };
+    for sub in subs {
+        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+        let part = &source.indices[range];
+        let part_tris = part.len() / 3;
+        // Each submesh gets its share of the target, rounded; never below one triangle if it had any.
+        let target = ((part_tris as f64 * target_triangles as f64 / total as f64).round() as usize)
+            .clamp(part_tris.min(1), part_tris);
+        let mut err = 0.0f32;
+        let simplified = if part.is_empty() || target >= part_tris {
+            part.to_vec()
+        } else {
+            meshopt::simplify_with_attributes_and_locks_decoder(
+                part,
+                &positions,
+                &attrs,
+                &weights,
+                ATTRIBUTE_COUNT * std::mem::size_of::<f32>(),
+                &locks,
+                target * 3,
+                max_error,
+                SimplifyOptions::RegularizeLight,
+                Some(&mut err),
+            )
+        };
+        worst = worst.max(err);
+        let mut simplified = simplified;
+        if !simplified.is_empty() {
+            meshopt::optimize_vertex_cache_in_place(&mut simplified, source.positions.len());
+        }
+        submeshes.push(Submesh {
+            first_index: indices.len() as u32,
+            index_count: simplified.len() as u32,
+            material: sub.material.clone(),
+        });
+        indices.extend_from_slice(&simplified);
+    }
+    if source.submeshes.is_empty() {
+        submeshes.clear();
+    }
+    let lod = compact(source, indices, submeshes);
+    (lod, worst)
+}
+
+/// For each old vertex, its new index in order of first use by `indices` (`u32::MAX` when unused): the
+/// vertex-fetch order meshoptimizer's `optimizeVertexFetchRemap` computes. Written here because the
+/// meshopt 0.7 wrapper truncates that table to the number of used vertices, dropping entries.
+fn first_use_remap(indices: &[u32], vertex_count: usize) -> Vec<u32> {
+    let mut remap = vec![u32::MAX; vertex_count];
+    let mut next = 0u32;
+    for &i in indices {
+        let r = &mut remap[i as usize];
+        if *r == u32::MAX {
+            *r = next;
+            next += 1;
+        }
+    }
+    remap
+}
+
+/// Keeps only the vertices the indices use, in first-use order (meshoptimizer's vertex-fetch order).
+fn compact(source: &Lod, mut indices: Vec<u32>, submeshes: Vec<Submesh>) -> Lod {
+    let remap = first_use_remap(&indices, source.positions.len());
+    let kept = remap.iter().filter(|&&r| r != u32::MAX).count();
+    let mut order = vec![0u32; kept];
+    for (old, &new) in remap.iter().enumerate() {
+        if new != u32::MAX {
+            order[new as usize] = old as u32;
+        }
+    }
+    for i in &mut indices {
+        *i = remap[*i as usize];
+    }
+    Lod {
+        positions: order
+            .iter()
+            .map(|&o| source.positions[o as usize])
+            .collect(),
+        normals: order.iter().map(|&o| source.normals[o as usize]).collect(),
+        uvs: if !source.uvs.is_empty() {
+            order.iter().map(|&o| source.uvs[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        joints: if !source.joints.is_empty() {
+            order.iter().map(|&o| source.joints[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        weights: if !source.weights.is_empty() {
+            order.iter().map(|&o| source.weights[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        indices,
+        submeshes,
+        error: 0.0,
+    }
+}
+
+/// Keeps the `keep` largest influences of every vertex and renormalises them to sum to one.
+pub fn limit_influences(lod: &mut Lod, keep: usize) {
+    for (j, w) in lod.joints.iter_mut().zip(&mut lod.weights) {
+        let mut order: [usize; MAX_INFLUENCES] = [0, 1, 2, 3];
+        // Stable: equal weights keep slot order.
+        order.sort_by(|&a, &b| w[b].total_cmp(&w[a]));
+        let (mut nj, mut nw) = ([0u16; MAX_INFLUENCES], [0.0f32; MAX_INFLUENCES]);
+        for (slot, &k) in order.iter().take(keep).enumerate() {
+            nj[slot] = j[k];
+            nw[slot] = w[k];
+        }
+        let sum: f32 = nw.iter().sum();
+        if sum > 0.0 {
+            for x in &mut nw {
+                *x /= sum;
+            }
+            *j = nj;
+            *w = nw;
+        }
+    }
+}
+
+/// Optimises LOD 0 in place for the vertex cache and vertex fetch, keeping `source_vertex` in step.
+pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
+    validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
+        mesh: mesh.name.clone(),
+        problem,
+    })?;
+    let g = &mesh.geometry;
+    let mut indices = Vec::with_capacity(g.indices.len());
+    let mut submeshes = Vec::new();
+    let whole = [Submesh {
+        first_index: 0,
+        index_count: g.indices.len() as u32,
+        material: String::new(),
+    }];
+    let subs: &[Submesh] = if g.submeshes.is_empty() {
+        &whole
+    } else {
+        &g.submeshes
+    };
+    for sub in subs {
+        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+        let mut part = g.indices[range].to_vec();
+        if !part.is_empty() {
+            meshopt::optimize_vertex_cache_in_place(&mut part, g.positions.len());
+        }
+        submeshes.push(Submesh {
+            first_index: indices.len() as u32,
+            index_count: part.len() as u32,
+            material: sub.material.clone(),
+        });
+        indices.extend(part);
+    }
+    if g.submeshes.is_empty() {
+        submeshes.clear();
+    }
+    // Unused vertices stay, after the used ones, so the map back to the source stays complete.
+    let remap = first_use_remap(&indices, g.positions.len());
+    let mut next = remap.iter().filter(|&&r| r != u32::MAX).count() as u32;
+    let remap: Vec<u32> = remap
+        .iter()
+        .map(|&r| {
+            if r == u32::MAX {
+                next += 1;
+                next - 1
+            } else {
+                r
+            }
+        })
+        .collect();
+    let n = g.positions.len();
+    let mut order = vec![0u32; n];
+    for (old, &new) in remap.iter().enumerate() {
+        order[new as usize] = old as u32;
+    }
+    let g = &mut mesh.geometry;
+    fn apply<T: Copy>(v: &mut Vec<T>, order: &[u32]) {
+        if !v.is_empty() {
+            *v = order.iter().map(|&o| v[o as usize]).collect();
+        }
+    }
+    apply(&mut g.positions, &order);
+    apply(&mut g.normals, &order);
+    apply(&mut g.uvs, &order);
+    apply(&mut g.joints, &order);
+    apply(&mut g.weights, &order);
+    if mesh.source_vertex.len() == n {
+        apply(&mut mesh.source_vertex, &order);
+    }
+    for i in &mut indices {
+        *i = remap[*i as usize];
+    }
+    g.indices = indices;
+    g.submeshes = submeshes;
+    Ok(())
+}
+
+/// Builds the LOD chain of one mesh from its geometry.
+pub fn build_lods(
+    mesh: &Mesh,
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+) -> Result<Vec<GeneratedLod>, LodError> {
+    options.validate()?;
+    validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
+        mesh: mesh.name.clone(),
+        problem,
+    })?;
+    if let Some(s) = skeleton {
+        if mesh
+            .geometry
+            .joints
+            .iter()
+            .flatten()
+            .any(|&j| j as usize >= s.len())
+        {
+            return Err(LodError::BadMesh {
+                mesh: mesh.name.clone(),
+                problem: format!("joint index past the skeleton's {} joints", s.len()),
+            });
+        }
+    }
+    let positions: Vec<[f32; 3]> = mesh
+        .geometry
+        .positions
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    let scale = if positions.is_empty() {
+        0.0
+    } else {
+        meshopt::simplify_scale_decoder(&positions)
+    };
+    let base_tris = mesh.geometry.triangle_count();
+    let mut out: Vec<GeneratedLod> = Vec::with_capacity(options.ratios.len());
+    let mut previous = mesh.geometry.clone();
+    let mut accumulated = 0.0f32;
+    for (k, &ratio) in options.ratios.iter().enumerate() {
+        let target = ((base_tris as f64) * ratio as f64).round() as usize;
+        let budget = (options.max_error - accumulated).max(0.0);
+        let (mut lod, step_error) = simplify_step(&previous, skeleton, target, budget);
+        accumulated += step_error;
+        if k + 1 == options.ratios.len() && options.lowest_lod_influences < MAX_INFLUENCES {
+            limit_influences(&mut lod, options.lowest_lod_influences);
+        }
+        lod.error = accumulated;
+        let reached = if base_tris == 0 {
+            1.0
+        } else {
+            lod.triangle_count() as f32 / base_tris as f32
+        };
+        // The target is met when within one triangle per submesh of it (rounding per submesh).
+        let slack = mesh.geometry.submeshes.len().max(1);
+        let stopped = lod.triangle_count() > target + slack;
+        out.push(GeneratedLod {
+            target_ratio: ratio,
+            reached_ratio: reached,
+            error_relative: accumulated,
+            error_model: accumulated * scale,
+            stopped_by_error_limit: stopped,
+            lod: lod.clone(),
+        });
+        previous = lod;
+    }
+    Ok(out)
+}
+
+/// What [`generate_lods`] did to each mesh.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshLodReport {
+    /// Mesh name.
+    pub mesh: String,
+    /// Triangles of LOD 0.
+    pub base_triangles: usize,
+    /// The generated LODs' figures: (triangles, vertices, target ratio, reached ratio, relative error,
+    /// error in model units, stopped by the error limit).
+    pub lods: Vec<GeneratedLod>,
+}
+
+/// Optimises every mesh's LOD 0 and replaces its generated LODs with a new chain.
+pub fn generate_lods(
+    scene: &mut Scene,
+    options: &LodOptions,
+) -> Result<Vec<MeshLodReport>, LodError> {
+    options.validate()?;
+    let skeleton = scene.skeleton.clone();
+    let mut reports = Vec::with_capacity(scene.meshes.len());
+    for mesh in &mut scene.meshes {
+        optimize_base(mesh)?;
+        mesh.lods = build_lods(mesh, skeleton.as_ref(), options)?;
+        reports.push(MeshLodReport {
+            mesh: mesh.name.clone(),
+            base_triangles: mesh.geometry.triangle_count(),
+            lods: mesh.lods.clone(),
+        });
+    }
+    Ok(reports)
+}

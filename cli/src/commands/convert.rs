@@ -225,13 +225,25 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
             if !dir.is_dir() {
                 bail!("{}: output directory does not exist", dir.display());
             }
-            let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
-            let mut outs = Vec::with_capacity(args.inputs.len());
+            // DIR/<stem>.sinew; inputs whose stems collide use DIR/<file name>.sinew instead.
+            let mut stems: HashMap<std::ffi::OsString, usize> = HashMap::new();
             for i in &args.inputs {
                 let stem = i
                     .file_stem()
                     .ok_or_else(|| anyhow!("{}: has no file name", i.display()))?;
-                let mut name = stem.to_os_string();
+                *stems.entry(stem.to_os_string()).or_default() += 1;
+            }
+            let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
+            let mut outs = Vec::with_capacity(args.inputs.len());
+            for i in &args.inputs {
+                let (Some(stem), Some(file_name)) = (i.file_stem(), i.file_name()) else {
+                    bail!("{}: has no file name", i.display());
+                };
+                let mut name = if stems.get(stem).copied().unwrap_or(0) > 1 {
+                    file_name.to_os_string()
+                } else {
+                    stem.to_os_string()
+                };
                 name.push(".sinew");
                 let out = dir.join(name);
                 if let Some(prev) = seen.insert(out.clone(), i) {

@@ -18,7 +18,7 @@ use lod_common::{diagonal, hausdorff};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods, LodOptions};
+use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning, DEFAULT_MAX_ERROR};
 use sinew_scene::Scene;
 use std::path::Path;
 use std::time::Instant;
@@ -100,7 +100,9 @@ struct Row {
 }
 
 fn print_rows(rows: &[Row], base_tris: usize) {
-    println!("| tool | triangles | ratio | Hausdorff (% diag) | posed Hausdorff (% diag) | time (ms) |");
+    println!(
+        "| tool | triangles | ratio | Hausdorff (% diag) | posed Hausdorff (% diag) | time (ms) |"
+    );
     println!("|---|---|---|---|---|---|");
     for r in rows {
         println!(
@@ -127,7 +129,9 @@ fn main() {
     let diag = diagonal(&base_p);
     let base_tris = base_i.len() / 3;
     let pose = mid_pose(&scene);
-    let posed_base = pose.as_ref().map(|(pal, _, _)| soup(&scene, None, Some(pal)));
+    let posed_base = pose
+        .as_ref()
+        .map(|(pal, _, _)| soup(&scene, None, Some(pal)));
     println!(
         "{original}: {} meshes, {} vertices, {base_tris} triangles, diagonal {diag:.4}",
         scene.meshes.len(),
@@ -149,14 +153,19 @@ fn main() {
         };
         (h, posed)
     };
-    let sinew_rows = |ratios: Vec<f32>, label: &str| -> Vec<Row> {
+    let sinew_tuned = |ratios: Vec<f32>,
+                       label: &str,
+                       tuning: LodTuning,
+                       max_error: f32|
+     -> Vec<Row> {
         let mut s = scene.clone();
         let lod_options = LodOptions {
             ratios,
+            max_error,
             ..Default::default()
         };
         let start = Instant::now();
-        let reports = generate_lods(&mut s, &lod_options).expect("LODs");
+        let reports = generate_lods_tuned(&mut s, &lod_options, &tuning).expect("LODs");
         let seconds = start.elapsed().as_secs_f64();
         for r in &reports {
             for g in &r.lods {
@@ -181,6 +190,98 @@ fn main() {
             })
             .collect()
     };
+    let sinew_rows = |ratios: Vec<f32>, label: &str| {
+        sinew_tuned(ratios, label, LodTuning::default(), DEFAULT_MAX_ERROR)
+    };
+    if others.first().map(String::as_str) == Some("--sweep") {
+        // The quality knobs one at a time against the defaults (docs/lod.md).
+        let d = LodTuning::default();
+        let variants: Vec<(&str, LodTuning, f32)> = vec![
+            ("default", d, DEFAULT_MAX_ERROR),
+            (
+                "no-regularize",
+                LodTuning {
+                    regularize: false,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "no-pose",
+                LodTuning {
+                    pose_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "pose-0.25",
+                LodTuning {
+                    pose_weight: 0.25,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "pose-4",
+                LodTuning {
+                    pose_weight: 4.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "normal-0",
+                LodTuning {
+                    normal_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "normal-2",
+                LodTuning {
+                    normal_weight: 2.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "uv-0",
+                LodTuning {
+                    uv_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "uv-2",
+                LodTuning {
+                    uv_weight: 2.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "attrs-0",
+                LodTuning {
+                    normal_weight: 0.0,
+                    uv_weight: 0.0,
+                    pose_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            ("max-error-0.02", d, 0.02),
+            ("max-error-0.1", d, 0.1),
+        ];
+        let mut rows = Vec::new();
+        for (label, tuning, max_error) in variants {
+            rows.extend(sinew_tuned(vec![0.5, 0.25], label, tuning, max_error));
+        }
+        print_rows(&rows, base_tris);
+        return;
+    }
     let mut rows = sinew_rows(vec![0.5, 0.25], "nominal");
     let mut reached = Vec::new();
     for other in others {

@@ -153,7 +153,12 @@ impl TriangleGrid {
             return f32::MAX;
         }
         // Distance from p to the grid's box: shells must reach past it.
-        let hi = self.lo + Vec3::new(self.dims[0] as f32, self.dims[1] as f32, self.dims[2] as f32) * self.cell;
+        let hi = self.lo
+            + Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) * self.cell;
         let outside = (self.lo - p).max(p - hi).max(Vec3::ZERO).length();
         let c = self.coord(p);
         let max_r = self.dims.iter().copied().max().unwrap_or(1);
@@ -162,9 +167,8 @@ impl TriangleGrid {
             for z in (c[2] - r).max(0)..=(c[2] + r).min(self.dims[2] - 1) {
                 for y in (c[1] - r).max(0)..=(c[1] + r).min(self.dims[1] - 1) {
                     for x in (c[0] - r).max(0)..=(c[0] + r).min(self.dims[0] - 1) {
-                        let on_shell = (x - c[0]).abs() == r
-                            || (y - c[1]).abs() == r
-                            || (z - c[2]).abs() == r;
+                        let on_shell =
+                            (x - c[0]).abs() == r || (y - c[1]).abs() == r || (z - c[2]).abs() == r;
                         if !on_shell {
                             continue;
                         }

@@ -100,11 +100,11 @@ pub const DEFAULT_PIXEL_ERROR: f32 = 1.0;
 /// the camera: `viewport_height * radius / (distance * tan(fov_y / 2))`, its projected diameter.
 /// A camera inside the bounding sphere (`distance <= radius`) sees it as infinitely large.
 pub fn projected_pixels(radius: f32, distance: f32, fov_y: f32, viewport_height: f32) -> f32 {
-    if !(distance > radius) {
+    if distance.is_nan() || radius.is_nan() || distance <= radius {
         return f32::INFINITY;
     }
     let t = (fov_y * 0.5).tan();
-    if !(t > 0.0) {
+    if t.is_nan() || t <= 0.0 {
         return f32::INFINITY;
     }
     viewport_height * radius / (distance * t)

@@ -1,8 +1,6 @@
 //! End-to-end: `sinew inspect` over the shared corpus. Expected values come from the corpus MANIFEST
 //! notes or are counted here straight from the file bytes, never from sinew's own code.
-//!
-//! Formats whose importer is not yet on the branch are `#[ignore]`d with the reason; the malformed
-//! files must fail cleanly whatever the state of the importers.
+//! The malformed files must fail cleanly.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
 mod common;
@@ -205,7 +203,6 @@ fn check_ms3d(rel: &str, expect_joints: usize, expect_tris: usize, expect_groups
 }
 
 #[test]
-#[ignore = "needs the MS3D importer (issue 3), not yet on this branch"]
 fn inspect_ms3d_corpus() {
     // (file, joints, triangles, groups) from MANIFEST.tsv; groups of jeep1/Wuson/etc. as noted there.
     check_ms3d("ms3d/cross.ms3d", 9, 76, ms3d_groups("ms3d/cross.ms3d"));
@@ -234,7 +231,6 @@ fn ms3d_groups(rel: &str) -> usize {
 }
 
 #[test]
-#[ignore = "needs the MS3D importer (issue 3), not yet on this branch"]
 fn inspect_ms3d_human_report_shows_the_tree() {
     let Some(path) = corpus_path("ms3d/cross.ms3d") else {
         return;
@@ -271,7 +267,6 @@ fn decode(bytes: &[u8]) -> String {
 }
 
 #[test]
-#[ignore = "needs the OBJ importer (issue 3), not yet on this branch"]
 fn inspect_obj_corpus() {
     for rel in [
         "obj/spot.obj",
@@ -336,7 +331,6 @@ fn check_gltf(rel: &str, extra: &[&str], joints: u64, tris: u64, clips: &[&str])
 }
 
 #[test]
-#[ignore = "needs the glTF importer (issue 4), not yet on this branch"]
 fn inspect_gltf_corpus() {
     if sinew_testdata::corpus().is_none() {
         return;
@@ -386,7 +380,6 @@ fn bvh_facts(text: &str) -> (Vec<String>, usize, f64) {
 }
 
 #[test]
-#[ignore = "needs the BVH importer (issue 4), not yet on this branch"]
 fn inspect_bvh_corpus() {
     // Joint counts per MANIFEST.tsv: 31, 31, 21, 31, 4, 2.
     for (rel, joints) in [

@@ -1,8 +1,15 @@
 //! Runtime benchmarks: one character frame on a 40-joint Biped skeleton, skinning throughput, and a
 //! memcpy for the machine's memory bandwidth. Figures are in docs/performance.md.
+//!
+//! Every benchmark runs twice: under `wall/` with criterion's wall-clock timer, and (on Linux) under
+//! `cpu/` with the benchmark thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), which leaves out the time
+//! the thread waited for a core on a busy shared machine.
 
 #![allow(clippy::unwrap_used)] // benchmark set-up on known-good data
 
+use criterion::measurement::Measurement;
+#[cfg(target_os = "linux")]
+use criterion::measurement::{ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{
@@ -146,7 +153,7 @@ fn upper_body_mask(skeleton: &Skeleton) -> Vec<f32> {
     mask
 }
 
-fn frame(c: &mut Criterion) {
+fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let skeleton = Arc::new(biped());
     let n = skeleton.len();
     let walk = Arc::new(clip("walk", &skeleton, 0.0));
@@ -165,7 +172,7 @@ fn frame(c: &mut Criterion) {
     let mut models = vec![Mat4::IDENTITY; n];
     let mut palette = vec![Mat4::IDENTITY; n];
 
-    let mut g = c.benchmark_group("frame_40_joints");
+    let mut g = c.benchmark_group(format!("{clock}/frame_40_joints"));
     g.bench_function("animator_full_frame", |bench| {
         bench.iter(|| {
             anim.update(black_box(1.0 / 60.0));
@@ -236,7 +243,7 @@ impl Rng {
 
 const VERTICES: usize = 100_000;
 
-fn skinning(c: &mut Criterion) {
+fn skinning<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let skeleton = biped();
     let n = skeleton.len();
     let walk = clip("walk", &skeleton, 0.0);
@@ -267,7 +274,7 @@ fn skinning(c: &mut Criterion) {
     let mut out_p = vec![Vec3::ZERO; VERTICES];
     let mut out_n = vec![Vec3::ZERO; VERTICES];
 
-    let mut g = c.benchmark_group("skinning");
+    let mut g = c.benchmark_group(format!("{clock}/skinning"));
     g.throughput(Throughput::Elements(VERTICES as u64));
     g.bench_function("lbs4_positions_normals_100k", |bench| {
         bench.iter(|| {
@@ -285,7 +292,7 @@ fn skinning(c: &mut Criterion) {
     const BYTES: usize = 256 << 20;
     let src = vec![1u8; BYTES];
     let mut dst = vec![0u8; BYTES];
-    let mut g = c.benchmark_group("memory");
+    let mut g = c.benchmark_group(format!("{clock}/memory"));
     g.sample_size(10);
     g.throughput(Throughput::Bytes(BYTES as u64));
     g.bench_function("memcpy_256MiB", |bench| {
@@ -297,5 +304,57 @@ fn skinning(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, frame, skinning);
-criterion_main!(benches);
+fn wall(c: &mut Criterion) {
+    frame(c, "wall");
+    skinning(c, "wall");
+}
+
+/// The calling thread's CPU time.
+#[cfg(target_os = "linux")]
+struct ThreadCpu;
+
+#[cfg(target_os = "linux")]
+static WALL: WallTime = WallTime;
+
+#[cfg(target_os = "linux")]
+impl Measurement for ThreadCpu {
+    type Intermediate = std::time::Duration;
+    type Value = std::time::Duration;
+    fn start(&self) -> Self::Intermediate {
+        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+        std::time::Duration::new(t.tv_sec as u64, t.tv_nsec as u32)
+    }
+    fn end(&self, i: Self::Intermediate) -> Self::Value {
+        self.start().saturating_sub(i)
+    }
+    fn add(&self, a: &Self::Value, b: &Self::Value) -> Self::Value {
+        *a + *b
+    }
+    fn zero(&self) -> Self::Value {
+        std::time::Duration::ZERO
+    }
+    fn to_f64(&self, v: &Self::Value) -> f64 {
+        v.as_nanos() as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        WALL.formatter()
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn cpu(c: &mut Criterion<ThreadCpu>) {
+    frame(c, "cpu");
+    skinning(c, "cpu");
+}
+
+criterion_group!(wall_clock, wall);
+#[cfg(target_os = "linux")]
+criterion_group! {
+    name = cpu_time;
+    config = Criterion::default().with_measurement(ThreadCpu);
+    targets = cpu
+}
+#[cfg(target_os = "linux")]
+criterion_main!(wall_clock, cpu_time);
+#[cfg(not(target_os = "linux"))]
+criterion_main!(wall_clock);

@@ -11,7 +11,7 @@
 
 use crate::skeleton::JointIndex;
 use crate::{Lod, Transform, MAX_INFLUENCES};
-use glam::{Mat4, Vec3, Vec3A, Vec4};
+use glam::{Mat3A, Mat4, Vec3, Vec3A, Vec4};
 
 /// Why a skinning step was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -61,6 +61,9 @@ fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinE
 /// Model-space matrices from local transforms: `models[i] = models[parent(i)] * locals[i].to_mat4()`,
 /// or `locals[i].to_mat4()` for a root. Parents must come before their children (as in a
 /// [`Skeleton`](crate::Skeleton)).
+///
+/// The product skips the terms that multiply the local matrix's zero bottom row (they add only zeros),
+/// so for affine matrices the result is the full product's, up to the sign of zero components.
 pub fn local_to_model(
     parents: &[Option<JointIndex>],
     locals: &[Transform],
@@ -79,19 +82,42 @@ pub fn local_to_model(
             }
         }
     }
+    let locals = &locals[..n];
+    let models = &mut models[..n];
     for i in 0..n {
-        let local = locals[i].to_mat4();
+        let local = &locals[i];
         models[i] = match parents[i] {
             // `p < i` was checked above.
-            Some(p) => models[p as usize] * local,
-            None => local,
+            Some(p) => mul_srt(&models[p as usize], local),
+            None => local.to_mat4(),
         };
     }
     Ok(())
 }
 
+/// `parent * local.to_mat4()` for an affine `parent` (bottom row `0 0 0 1`), without the terms that
+/// multiply the local matrix's zero bottom row. For such a parent the result equals the full product.
+#[inline(always)]
+fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
+    let r = Mat3A::from_quat(local.rotation);
+    let s = local.scale;
+    let t = local.translation;
+    let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
+    let col = |c: Vec3A, k: f32| {
+        let c = c * k;
+        px * c.x + py * c.y + pz * c.z
+    };
+    Mat4::from_cols(
+        col(r.x_axis, s.x),
+        col(r.y_axis, s.y),
+        col(r.z_axis, s.z),
+        px * t.x + py * t.y + pz * t.z + pw,
+    )
+}
+
 /// The skinning palette: `palette[i] = models[i] * inverse_bind[i]`, which moves a bind-pose
-/// model-space point to where joint `i` carries it now.
+/// model-space point to where joint `i` carries it now. Matrices are taken as affine: the inverse bind
+/// matrices' bottom row is not read (it is `0 0 0 1` for any rigid, scaled or sheared bind).
 pub fn skinning_palette(
     models: &[Mat4],
     inverse_bind: &[Mat4],
@@ -100,9 +126,23 @@ pub fn skinning_palette(
     same_len("inverse bind matrices", models.len(), inverse_bind.len())?;
     same_len("palette", models.len(), palette.len())?;
     for ((m, ib), out) in models.iter().zip(inverse_bind).zip(palette.iter_mut()) {
-        *out = *m * *ib;
+        *out = mul_affine(m, ib);
     }
     Ok(())
+}
+
+/// `a * b` for affine matrices: `b`'s bottom row is taken as `0 0 0 1` (its stored bottom row is not
+/// read). For affine inputs this equals the full product, up to the sign of zero components.
+#[inline(always)]
+fn mul_affine(a: &Mat4, b: &Mat4) -> Mat4 {
+    let (ax, ay, az, aw) = (a.x_axis, a.y_axis, a.z_axis, a.w_axis);
+    let col = |c: Vec4| ax * c.x + ay * c.y + az * c.z;
+    Mat4::from_cols(
+        col(b.x_axis),
+        col(b.y_axis),
+        col(b.z_axis),
+        col(b.w_axis) + aw,
+    )
 }
 
 /// Linear blend skinning of positions and normals with four influences per vertex.
@@ -227,6 +267,7 @@ fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Quat;
 
     #[test]
     fn normals_under_non_uniform_scale_stay_perpendicular() {
@@ -262,6 +303,41 @@ mod tests {
         )
         .unwrap();
         assert_eq!(n[0], Vec3::new(-1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn local_to_model_matches_the_plain_matrix_product() {
+        let parents = [None, Some(0), Some(1), Some(0)];
+        let locals = [
+            Transform::new(
+                Vec3::new(1.0, 2.0, 3.0),
+                Quat::from_rotation_y(0.7),
+                Vec3::ONE,
+            ),
+            Transform::new(
+                Vec3::new(0.5, -1.0, 0.0),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.2, 2.0),
+                Vec3::new(1.0, 2.0, 0.5),
+            ),
+            Transform::new(Vec3::Z, Quat::from_rotation_x(-0.4), Vec3::splat(3.0)),
+            Transform::from_translation(Vec3::NEG_X),
+        ];
+        let mut models = [Mat4::IDENTITY; 4];
+        local_to_model(&parents, &locals, &mut models).unwrap();
+        let mut expected = [Mat4::IDENTITY; 4];
+        for i in 0..4 {
+            expected[i] = match parents[i] {
+                Some(p) => expected[p as usize] * locals[i].to_mat4(),
+                None => locals[i].to_mat4(),
+            };
+            assert!(models[i].abs_diff_eq(expected[i], 1e-5), "{i}");
+        }
+        let inverse: Vec<Mat4> = expected.iter().map(|m| m.inverse()).collect();
+        let mut palette = [Mat4::ZERO; 4];
+        skinning_palette(&models, &inverse, &mut palette).unwrap();
+        for p in palette {
+            assert!(p.abs_diff_eq(Mat4::IDENTITY, 1e-5), "{p}");
+        }
     }
 
     #[test]

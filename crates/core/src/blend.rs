@@ -219,7 +219,14 @@ impl BlendBuffers {
         }
         for ((a, b), o) in self.accum.iter().zip(bind).zip(out.iter_mut()) {
             let w = a.weight;
-            *o = if w >= 1.0 {
+            *o = if w == 1.0 {
+                // Dividing a non-NaN value by exactly 1 changes no bits: skip the two divisions.
+                Transform {
+                    translation: Vec3::from(a.translation),
+                    rotation: a.rotation.normalize(),
+                    scale: Vec3::from(a.scale),
+                }
+            } else if w >= 1.0 {
                 Transform {
                     translation: Vec3::from(a.translation / w),
                     rotation: a.rotation.normalize(),

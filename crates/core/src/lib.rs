@@ -26,7 +26,9 @@ pub use blend::{apply_additive, BlendBuffers, BlendError, Layer};
 pub use clip::{Channel, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves};
 pub use mesh::{Lod, Mesh, Submesh, MAX_INFLUENCES};
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
-pub use skinning::{local_to_model, skin, skin_lod, skinning_palette, SkinError};
+pub use skinning::{
+    local_to_model, local_to_model_and_palette, skin, skin_lod, skinning_palette, SkinError,
+};
 pub use transform::Transform;
 
 pub use glam;

@@ -11,7 +11,7 @@
 
 use crate::skeleton::JointIndex;
 use crate::{Lod, Transform, MAX_INFLUENCES};
-use glam::{Mat3A, Mat4, Vec3, Vec3A, Vec4};
+use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// Why a skinning step was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -62,8 +62,10 @@ fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinE
 /// or `locals[i].to_mat4()` for a root. Parents must come before their children (as in a
 /// [`Skeleton`](crate::Skeleton)).
 ///
-/// The product skips the terms that multiply the local matrix's zero bottom row (they add only zeros),
-/// so for affine matrices the result is the full product's, up to the sign of zero components.
+/// The product is the affine (3x4) one: it skips the terms that multiply the local matrix's zero
+/// bottom row, so for affine matrices the result is the full product's up to rounding (the rotation
+/// is multiplied into the parent before the scale is applied). Same bits as
+/// [`local_to_model_and_palette`]'s `models`.
 pub fn local_to_model(
     parents: &[Option<JointIndex>],
     locals: &[Transform],
@@ -72,6 +74,40 @@ pub fn local_to_model(
     let n = parents.len();
     same_len("locals", n, locals.len())?;
     same_len("models", n, models.len())?;
+    check_parents(parents)?;
+    for i in 0..n {
+        let m = model_of(parents, models, i, &locals[i]);
+        models[i] = m;
+    }
+    Ok(())
+}
+
+/// [`local_to_model`] and [`skinning_palette`] in one pass over the joints (the model matrix is still
+/// in registers when the palette entry is made). The results are bit-identical to calling the two
+/// functions one after the other.
+pub fn local_to_model_and_palette(
+    parents: &[Option<JointIndex>],
+    locals: &[Transform],
+    inverse_bind: &[Mat4],
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) -> Result<(), SkinError> {
+    let n = parents.len();
+    same_len("locals", n, locals.len())?;
+    same_len("models", n, models.len())?;
+    same_len("inverse bind matrices", n, inverse_bind.len())?;
+    same_len("palette", n, palette.len())?;
+    check_parents(parents)?;
+    let (inverse_bind, palette) = (&inverse_bind[..n], &mut palette[..n]);
+    for i in 0..n {
+        let m = model_of(parents, models, i, &locals[i]);
+        models[i] = m;
+        palette[i] = mul_affine(&m, &inverse_bind[i]);
+    }
+    Ok(())
+}
+
+fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
     for (i, p) in parents.iter().enumerate() {
         if let Some(p) = *p {
             if p as usize >= i {
@@ -82,35 +118,44 @@ pub fn local_to_model(
             }
         }
     }
-    let locals = &locals[..n];
-    let models = &mut models[..n];
-    for i in 0..n {
-        let local = &locals[i];
-        models[i] = match parents[i] {
-            // `p < i` was checked above.
-            Some(p) => mul_srt(&models[p as usize], local),
-            None => local.to_mat4(),
-        };
-    }
     Ok(())
 }
 
+/// Joint `i`'s model matrix from its parent's (already in `models`, checked to come before `i`).
+#[inline(always)]
+fn model_of(parents: &[Option<JointIndex>], models: &[Mat4], i: usize, local: &Transform) -> Mat4 {
+    match parents[i] {
+        Some(p) => mul_srt(&models[p as usize], local),
+        None => mul_srt(&Mat4::IDENTITY, local),
+    }
+}
+
 /// `parent * local.to_mat4()` for an affine `parent` (bottom row `0 0 0 1`), without the terms that
-/// multiply the local matrix's zero bottom row. For such a parent the result equals the full product.
+/// multiply the local matrix's zero bottom row.
+///
+/// The rotation matrix is built directly in "splat" form (every entry broadcast to the four lanes of
+/// a SIMD register, with the same scalar formulas as glam's `Mat3A::from_quat`), so the product with
+/// the parent's columns needs no further shuffles: `column_i = (px*r0i + py*r1i + pz*r2i) * s_i`.
 #[inline(always)]
 fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
-    let r = Mat3A::from_quat(local.rotation);
+    let q = Vec4::from(local.rotation);
+    let (x, y, z, w) = (q.xxxx(), q.yyyy(), q.zzzz(), q.wwww());
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, xy, xz) = (x * x2, x * y2, x * z2);
+    let (yy, yz, zz) = (y * y2, y * z2, z * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let one = Vec4::ONE;
+    let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
     let s = local.scale;
     let t = local.translation;
-    let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
-    let col = |c: Vec3A, k: f32| {
-        let c = c * k;
-        px * c.x + py * c.y + pz * c.z
-    };
+    // Column i of R is (r0i, r1i, r2i).
+    let c0 = px * (one - (yy + zz)) + py * (xy + wz) + pz * (xz - wy);
+    let c1 = px * (xy - wz) + py * (one - (xx + zz)) + pz * (yz + wx);
+    let c2 = px * (xz + wy) + py * (yz - wx) + pz * (one - (xx + yy));
     Mat4::from_cols(
-        col(r.x_axis, s.x),
-        col(r.y_axis, s.y),
-        col(r.z_axis, s.z),
+        c0 * s.x,
+        c1 * s.y,
+        c2 * s.z,
         px * t.x + py * t.y + pz * t.z + pw,
     )
 }
@@ -182,20 +227,22 @@ pub fn skin(
         same_len("normals", n, normals.len())?;
         same_len("output normals", n, out_normals.len())?;
     }
-    let weights = &weights[..n];
-    let out_positions = &mut out_positions[..n];
+    // Every per-vertex slice has length `n` (checked above), so the zips visit every vertex.
+    let inputs = positions.iter().zip(joints).zip(weights).enumerate();
     if with_normals {
-        let normals = &normals[..n];
-        let out_normals = &mut out_normals[..n];
-        for v in 0..n {
-            let m = blend(palette, &joints[v], &weights[v], v)?;
-            out_positions[v] = transform_point(&m, positions[v]);
-            out_normals[v] = transform_normal(&m, normals[v]);
+        let outputs = normals
+            .iter()
+            .zip(out_positions.iter_mut())
+            .zip(out_normals.iter_mut());
+        for ((v, ((p, j), w)), ((n, op), on)) in inputs.zip(outputs) {
+            let m = blend(palette, j, w, v)?;
+            *op = transform_point(&m, *p);
+            *on = transform_normal(&m, *n);
         }
     } else {
-        for v in 0..n {
-            let m = blend(palette, &joints[v], &weights[v], v)?;
-            out_positions[v] = transform_point(&m, positions[v]);
+        for ((v, ((p, j), w)), op) in inputs.zip(out_positions.iter_mut()) {
+            let m = blend(palette, j, w, v)?;
+            *op = transform_point(&m, *p);
         }
     }
     Ok(())
@@ -251,17 +298,30 @@ fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
     (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
 }
 
+/// `n` through the cofactor of `m`'s 3x3 part, sign-corrected by the determinant, normalised.
+///
+/// The three cross products share their shuffles: with `s_k = a_k.zxy()`, `s_a*b - a*s_b` is
+/// `(a × b).yzx()` (the same per-lane products and differences as `a.cross(b)`), so the sum is formed
+/// in `yzx` lane order and shuffled back once at the end. The normalisation divides by the length
+/// (no reciprocal).
 #[inline(always)]
 fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
     let a0 = Vec3A::from_vec4(m[0]);
     let a1 = Vec3A::from_vec4(m[1]);
     let a2 = Vec3A::from_vec4(m[2]);
-    let c0 = a1.cross(a2);
-    let c1 = a2.cross(a0);
-    let c2 = a0.cross(a1);
-    let r = c0 * n.x + c1 * n.y + c2 * n.z;
-    let r = if a0.dot(c0) < 0.0 { -r } else { r };
-    Vec3::from(r.normalize_or_zero())
+    let (s0, s1, s2) = (a0.zxy(), a1.zxy(), a2.zxy());
+    let c0 = s1 * a2 - a1 * s2; // (a1 × a2).yzx
+    let c1 = s2 * a0 - a2 * s0; // (a2 × a0).yzx
+    let c2 = s0 * a1 - a0 * s1; // (a0 × a1).yzx
+    let r = c0 * n.x + c1 * n.y + c2 * n.z; // (cofactor * n).yzx
+    let det = a0.yzx().dot(c0);
+    let len = r.dot(r).sqrt();
+    if len > 0.0 && len < f32::INFINITY {
+        let len = if det < 0.0 { -len } else { len };
+        Vec3::from((r / len).zxy())
+    } else {
+        Vec3::ZERO
+    }
 }
 
 #[cfg(test)]

@@ -228,18 +228,45 @@ pub fn skin(
         same_len("output normals", n, out_normals.len())?;
     }
     // Every per-vertex slice has length `n` (checked above), so the zips visit every vertex.
-    let inputs = positions.iter().zip(joints).zip(weights).enumerate();
     if with_normals {
-        let outputs = normals
-            .iter()
-            .zip(out_positions.iter_mut())
-            .zip(out_normals.iter_mut());
-        for ((v, ((p, j), w)), ((n, op), on)) in inputs.zip(outputs) {
-            let m = blend(palette, j, w, v)?;
-            *op = transform_point(&m, *p);
-            *on = transform_normal(&m, *n);
+        // Two passes per chunk of vertices: the first blends, writes the position and keeps the
+        // sign-corrected, unnormalised normal; the second normalises. Separating the long
+        // square-root-and-divide latency from the blend lets the CPU overlap many vertices. The
+        // operations on each vertex are the same as in one pass.
+        let mut pending = [Vec3A::ZERO; CHUNK];
+        let chunks = positions
+            .chunks(CHUNK)
+            .zip(normals.chunks(CHUNK))
+            .zip(joints.chunks(CHUNK))
+            .zip(weights.chunks(CHUNK))
+            .zip(out_positions.chunks_mut(CHUNK))
+            .zip(out_normals.chunks_mut(CHUNK));
+        for (c, (((((ps, ns), js), ws), ops), ons)) in chunks.enumerate() {
+            let mut done = 0;
+            let mut error = None;
+            let vertices = ps.iter().zip(ns).zip(js).zip(ws).zip(ops.iter_mut());
+            for (((((p, n), j), w), op), r) in vertices.zip(pending.iter_mut()) {
+                match blend(palette, j, w, c * CHUNK + done) {
+                    Ok(m) => {
+                        *op = transform_point(&m, *p);
+                        *r = cofactor_normal(&m, *n);
+                        done += 1;
+                    }
+                    Err(e) => {
+                        error = Some(e);
+                        break;
+                    }
+                }
+            }
+            for (r, on) in pending[..done].iter().zip(ons.iter_mut()) {
+                *on = normalize_yzx(*r);
+            }
+            if let Some(e) = error {
+                return Err(e);
+            }
         }
     } else {
+        let inputs = positions.iter().zip(joints).zip(weights).enumerate();
         for ((v, ((p, j), w)), op) in inputs.zip(out_positions.iter_mut()) {
             let m = blend(palette, j, w, v)?;
             *op = transform_point(&m, *p);
@@ -247,6 +274,9 @@ pub fn skin(
     }
     Ok(())
 }
+
+/// Vertices per chunk in [`skin`]'s two-pass loop (a 512-byte stack buffer).
+const CHUNK: usize = 32;
 
 /// Skins one LOD's positions and normals with [`skin`]. A LOD without normals skins positions only
 /// (pass an empty `out_normals`). A static LOD (no joints) is a [`SkinError::Length`] on `joints`.
@@ -298,14 +328,14 @@ fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
     (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
 }
 
-/// `n` through the cofactor of `m`'s 3x3 part, sign-corrected by the determinant, normalised.
+/// `n` through the cofactor of `m`'s 3x3 part, negated when the determinant is negative, not yet
+/// normalised, in `yzx` lane order (see [`normalize_yzx`]).
 ///
 /// The three cross products share their shuffles: with `s_k = a_k.zxy()`, `s_a*b - a*s_b` is
 /// `(a × b).yzx()` (the same per-lane products and differences as `a.cross(b)`), so the sum is formed
-/// in `yzx` lane order and shuffled back once at the end. The normalisation divides by the length
-/// (no reciprocal).
+/// in `yzx` lane order and shuffled back once, after normalising.
 #[inline(always)]
-fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
+fn cofactor_normal(m: &[Vec4; 4], n: Vec3) -> Vec3A {
     let a0 = Vec3A::from_vec4(m[0]);
     let a1 = Vec3A::from_vec4(m[1]);
     let a2 = Vec3A::from_vec4(m[2]);
@@ -314,10 +344,19 @@ fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
     let c1 = s2 * a0 - a2 * s0; // (a2 × a0).yzx
     let c2 = s0 * a1 - a0 * s1; // (a0 × a1).yzx
     let r = c0 * n.x + c1 * n.y + c2 * n.z; // (cofactor * n).yzx
-    let det = a0.yzx().dot(c0);
+    if a0.yzx().dot(c0) < 0.0 {
+        -r
+    } else {
+        r
+    }
+}
+
+/// `r / |r|` shuffled from `yzx` back to `xyz` lane order; zero when `|r|` is zero or not finite.
+/// Divides by the length (no reciprocal).
+#[inline(always)]
+fn normalize_yzx(r: Vec3A) -> Vec3 {
     let len = r.dot(r).sqrt();
     if len > 0.0 && len < f32::INFINITY {
-        let len = if det < 0.0 { -len } else { len };
         Vec3::from((r / len).zxy())
     } else {
         Vec3::ZERO
@@ -398,6 +437,97 @@ mod tests {
         for p in palette {
             assert!(p.abs_diff_eq(Mat4::IDENTITY, 1e-5), "{p}");
         }
+    }
+
+    #[test]
+    fn fused_palette_is_bit_identical_to_the_two_steps() {
+        let parents = [None, Some(0), Some(1), Some(1), Some(3)];
+        let locals: Vec<Transform> = (0..5)
+            .map(|i| {
+                let f = i as f32;
+                Transform::new(
+                    Vec3::new(f, 1.0 - f, 0.5 * f),
+                    Quat::from_euler(glam::EulerRot::XYZ, 0.3 * f, -0.7 + f, 1.1 * f).normalize(),
+                    Vec3::new(1.0 + 0.1 * f, 1.0, 2.0 - 0.3 * f),
+                )
+            })
+            .collect();
+        let inverse_bind: Vec<Mat4> = (0..5)
+            .map(|i| {
+                Mat4::from_rotation_z(i as f32) * Mat4::from_translation(Vec3::splat(i as f32))
+            })
+            .collect();
+        let (mut m1, mut p1) = ([Mat4::ZERO; 5], [Mat4::ZERO; 5]);
+        local_to_model(&parents, &locals, &mut m1).unwrap();
+        skinning_palette(&m1, &inverse_bind, &mut p1).unwrap();
+        let (mut m2, mut p2) = ([Mat4::ZERO; 5], [Mat4::ZERO; 5]);
+        local_to_model_and_palette(&parents, &locals, &inverse_bind, &mut m2, &mut p2).unwrap();
+        let bits = |m: &[Mat4]| -> Vec<u32> {
+            m.iter()
+                .flat_map(|m| m.to_cols_array())
+                .map(f32::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&m1), bits(&m2));
+        assert_eq!(bits(&p1), bits(&p2));
+        // And a root's model matrix is its local matrix.
+        assert!(m1[0].abs_diff_eq(locals[0].to_mat4(), 1e-6));
+    }
+
+    #[test]
+    fn normals_match_the_inverse_transpose() {
+        // Rotations, non-uniform scales, shears and mirrors; expected is normalize((A^-1)^T n),
+        // computed with glam's general inverse (independent of the cofactor code).
+        let mats = [
+            Mat4::from_scale_rotation_translation(
+                Vec3::new(2.0, 0.5, 1.5),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.4, -1.3, 2.2),
+                Vec3::new(1.0, -2.0, 3.0),
+            ),
+            Mat4::from_scale(Vec3::new(-1.0, 3.0, 0.25)),
+            Mat4::from_cols_array(&[
+                1.0, 0.2, -0.3, 0.0, 0.5, 1.5, 0.1, 0.0, -0.4, 0.3, 0.8, 0.0, 4.0, 5.0, 6.0, 1.0,
+            ]),
+        ];
+        let normals = [
+            Vec3::X,
+            Vec3::new(0.3, -0.9, 0.2).normalize(),
+            Vec3::new(-0.5, 0.5, 0.7).normalize(),
+        ];
+        for (k, m) in mats.iter().enumerate() {
+            for n in normals {
+                let mut out_n = [Vec3::ZERO];
+                let mut out_p = [Vec3::ZERO];
+                skin(
+                    &[*m],
+                    &[Vec3::ONE],
+                    &[n],
+                    &[[0; 4]],
+                    &[[1.0, 0.0, 0.0, 0.0]],
+                    &mut out_p,
+                    &mut out_n,
+                )
+                .unwrap();
+                let a = glam::Mat3::from_mat4(*m);
+                let e = (a.inverse().transpose() * n).normalize();
+                assert!((out_n[0] - e).length() < 1e-6, "{k}: {} vs {e}", out_n[0]);
+                assert!((out_p[0] - m.transform_point3(Vec3::ONE)).length() < 1e-5);
+            }
+        }
+        // A zero normal stays zero.
+        let mut out_n = [Vec3::ONE];
+        let mut out_p = [Vec3::ZERO];
+        skin(
+            &mats[..1],
+            &[Vec3::ONE],
+            &[Vec3::ZERO],
+            &[[0; 4]],
+            &[[1.0, 0.0, 0.0, 0.0]],
+            &mut out_p,
+            &mut out_n,
+        )
+        .unwrap();
+        assert_eq!(out_n[0], Vec3::ZERO);
     }
 
     #[test]

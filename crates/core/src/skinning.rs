@@ -230,10 +230,11 @@ pub fn skin(
     // Every per-vertex slice has length `n` (checked above), so the zips visit every vertex.
     if with_normals {
         // Two passes per chunk of vertices: the first blends, writes the position and keeps the
-        // sign-corrected, unnormalised normal; the second normalises. Separating the long
+        // unnormalised normal and the determinant's three products; the second sums the
+        // determinant, corrects the sign and normalises. Separating the long
         // square-root-and-divide latency from the blend lets the CPU overlap many vertices. The
         // operations on each vertex are the same as in one pass.
-        let mut pending = [Vec3A::ZERO; CHUNK];
+        let mut pending = [(Vec3A::ZERO, Vec3A::ZERO); CHUNK];
         let chunks = positions
             .chunks(CHUNK)
             .zip(normals.chunks(CHUNK))
@@ -258,8 +259,8 @@ pub fn skin(
                     }
                 }
             }
-            for (r, on) in pending[..done].iter().zip(ons.iter_mut()) {
-                *on = normalize_yzx(*r);
+            for (&(r, d), on) in pending[..done].iter().zip(ons.iter_mut()) {
+                *on = normalize_yzx(r, d);
             }
             if let Some(e) = error {
                 return Err(e);
@@ -275,7 +276,7 @@ pub fn skin(
     Ok(())
 }
 
-/// Vertices per chunk in [`skin`]'s two-pass loop (a 512-byte stack buffer).
+/// Vertices per chunk in [`skin`]'s two-pass loop (a 1 KiB stack buffer).
 const CHUNK: usize = 32;
 
 /// Skins one LOD's positions and normals with [`skin`]. A LOD without normals skins positions only
@@ -328,14 +329,14 @@ fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
     (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
 }
 
-/// `n` through the cofactor of `m`'s 3x3 part, negated when the determinant is negative, not yet
-/// normalised, in `yzx` lane order (see [`normalize_yzx`]).
+/// `n` through the cofactor of `m`'s 3x3 part, not yet normalised, in `yzx` lane order, and the
+/// three products whose sum is the determinant of the 3x3 part (see [`normalize_yzx`]).
 ///
 /// The three cross products share their shuffles: with `s_k = a_k.zxy()`, `s_a*b - a*s_b` is
 /// `(a × b).yzx()` (the same per-lane products and differences as `a.cross(b)`), so the sum is formed
 /// in `yzx` lane order and shuffled back once, after normalising.
 #[inline(always)]
-fn cofactor_normal(m: &[Vec4; 4], n: Vec3) -> Vec3A {
+fn cofactor_normal(m: &[Vec4; 4], n: Vec3) -> (Vec3A, Vec3A) {
     let a0 = Vec3A::from_vec4(m[0]);
     let a1 = Vec3A::from_vec4(m[1]);
     let a2 = Vec3A::from_vec4(m[2]);
@@ -344,19 +345,18 @@ fn cofactor_normal(m: &[Vec4; 4], n: Vec3) -> Vec3A {
     let c1 = s2 * a0 - a2 * s0; // (a2 × a0).yzx
     let c2 = s0 * a1 - a0 * s1; // (a0 × a1).yzx
     let r = c0 * n.x + c1 * n.y + c2 * n.z; // (cofactor * n).yzx
-    if a0.yzx().dot(c0) < 0.0 {
-        -r
-    } else {
-        r
-    }
+    (r, a0.yzx() * c0)
 }
 
-/// `r / |r|` shuffled from `yzx` back to `xyz` lane order; zero when `|r|` is zero or not finite.
-/// Divides by the length (no reciprocal).
+/// `r / |r|`, negated when the determinant (the sum of `d`'s lanes) is negative, shuffled from `yzx`
+/// back to `xyz` lane order; zero when `|r|` is zero or not finite. Divides by the signed length (no
+/// reciprocal).
 #[inline(always)]
-fn normalize_yzx(r: Vec3A) -> Vec3 {
+fn normalize_yzx(r: Vec3A, d: Vec3A) -> Vec3 {
     let len = r.dot(r).sqrt();
     if len > 0.0 && len < f32::INFINITY {
+        let det = d.element_sum();
+        let len = if det < 0.0 { -len } else { len };
         Vec3::from((r / len).zxy())
     } else {
         Vec3::ZERO

@@ -1,13 +1,20 @@
 //! Runtime benchmarks: one character frame on a 40-joint Biped skeleton, skinning throughput, and a
 //! memcpy for the machine's memory bandwidth. Figures are in docs/performance.md.
+//!
+//! Every benchmark runs twice: under `wall/` with criterion's wall-clock timer, and (on Linux) under
+//! `cpu/` with the benchmark thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), which leaves out the time
+//! the thread waited for a core on a busy shared machine.
 
 #![allow(clippy::unwrap_used)] // benchmark set-up on known-good data
 
+use criterion::measurement::Measurement;
+#[cfg(target_os = "linux")]
+use criterion::measurement::{ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{
-    local_to_model, skin, skinning_palette, Animator, BlendBuffers, Clip, ClipBinding, Curve,
-    JointDesc, Layer, Sampler, Skeleton, TrackCurves, Transform,
+    local_to_model, local_to_model_and_palette, skin, skinning_palette, Animator, BlendBuffers,
+    Clip, ClipBinding, Curve, JointDesc, Layer, Sampler, Skeleton, TrackCurves, Transform,
 };
 use std::hint::black_box;
 use std::sync::Arc;
@@ -146,7 +153,7 @@ fn upper_body_mask(skeleton: &Skeleton) -> Vec<f32> {
     mask
 }
 
-fn frame(c: &mut Criterion) {
+fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let skeleton = Arc::new(biped());
     let n = skeleton.len();
     let walk = Arc::new(clip("walk", &skeleton, 0.0));
@@ -165,13 +172,19 @@ fn frame(c: &mut Criterion) {
     let mut models = vec![Mat4::IDENTITY; n];
     let mut palette = vec![Mat4::IDENTITY; n];
 
-    let mut g = c.benchmark_group("frame_40_joints");
+    let mut g = c.benchmark_group(format!("{clock}/frame_40_joints"));
     g.bench_function("animator_full_frame", |bench| {
         bench.iter(|| {
             anim.update(black_box(1.0 / 60.0));
             anim.evaluate(&mut locals).unwrap();
-            local_to_model(skeleton.parents(), &locals, &mut models).unwrap();
-            skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
+            local_to_model_and_palette(
+                skeleton.parents(),
+                &locals,
+                skeleton.inverse_bind(),
+                &mut models,
+                &mut palette,
+            )
+            .unwrap();
             black_box(&palette);
         })
     });
@@ -212,8 +225,26 @@ fn frame(c: &mut Criterion) {
     });
     g.bench_function("local_to_model_and_palette", |bench| {
         bench.iter(|| {
-            local_to_model(skeleton.parents(), black_box(&locals), &mut models).unwrap();
-            skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
+            local_to_model_and_palette(
+                skeleton.parents(),
+                black_box(&locals),
+                skeleton.inverse_bind(),
+                &mut models,
+                &mut palette,
+            )
+            .unwrap();
+            black_box(&palette);
+        })
+    });
+    g.bench_function("local_to_model_and_palette_before", |bench| {
+        bench.iter(|| {
+            before::local_to_model_and_palette(
+                skeleton.parents(),
+                black_box(&locals),
+                skeleton.inverse_bind(),
+                &mut models,
+                &mut palette,
+            );
             black_box(&palette);
         })
     });
@@ -236,7 +267,7 @@ impl Rng {
 
 const VERTICES: usize = 100_000;
 
-fn skinning(c: &mut Criterion) {
+fn skinning<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let skeleton = biped();
     let n = skeleton.len();
     let walk = clip("walk", &skeleton, 0.0);
@@ -267,11 +298,20 @@ fn skinning(c: &mut Criterion) {
     let mut out_p = vec![Vec3::ZERO; VERTICES];
     let mut out_n = vec![Vec3::ZERO; VERTICES];
 
-    let mut g = c.benchmark_group("skinning");
+    let mut g = c.benchmark_group(format!("{clock}/skinning"));
     g.throughput(Throughput::Elements(VERTICES as u64));
     g.bench_function("lbs4_positions_normals_100k", |bench| {
         bench.iter(|| {
             skin(
+                &palette, &positions, &normals, &joints, &weights, &mut out_p, &mut out_n,
+            )
+            .unwrap();
+            black_box((&out_p, &out_n));
+        })
+    });
+    g.bench_function("lbs4_positions_normals_100k_before", |bench| {
+        bench.iter(|| {
+            before::skin(
                 &palette, &positions, &normals, &joints, &weights, &mut out_p, &mut out_n,
             )
             .unwrap();
@@ -285,7 +325,7 @@ fn skinning(c: &mut Criterion) {
     const BYTES: usize = 256 << 20;
     let src = vec![1u8; BYTES];
     let mut dst = vec![0u8; BYTES];
-    let mut g = c.benchmark_group("memory");
+    let mut g = c.benchmark_group(format!("{clock}/memory"));
     g.sample_size(10);
     g.throughput(Throughput::Bytes(BYTES as u64));
     g.bench_function("memcpy_256MiB", |bench| {
@@ -297,5 +337,172 @@ fn skinning(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, frame, skinning);
-criterion_main!(benches);
+fn wall(c: &mut Criterion) {
+    frame(c, "wall");
+    skinning(c, "wall");
+}
+
+/// The calling thread's CPU time.
+#[cfg(target_os = "linux")]
+struct ThreadCpu;
+
+#[cfg(target_os = "linux")]
+static WALL: WallTime = WallTime;
+
+#[cfg(target_os = "linux")]
+impl Measurement for ThreadCpu {
+    type Intermediate = std::time::Duration;
+    type Value = std::time::Duration;
+    fn start(&self) -> Self::Intermediate {
+        let t = rustix::time::clock_gettime(rustix::time::ClockId::ThreadCPUTime);
+        std::time::Duration::new(t.tv_sec as u64, t.tv_nsec as u32)
+    }
+    fn end(&self, i: Self::Intermediate) -> Self::Value {
+        self.start().saturating_sub(i)
+    }
+    fn add(&self, a: &Self::Value, b: &Self::Value) -> Self::Value {
+        *a + *b
+    }
+    fn zero(&self) -> Self::Value {
+        std::time::Duration::ZERO
+    }
+    fn to_f64(&self, v: &Self::Value) -> f64 {
+        v.as_nanos() as f64
+    }
+    fn formatter(&self) -> &dyn ValueFormatter {
+        WALL.formatter()
+    }
+}
+
+#[cfg(target_os = "linux")]
+fn cpu(c: &mut Criterion<ThreadCpu>) {
+    frame(c, "cpu");
+    skinning(c, "cpu");
+}
+
+/// The first implementation's skinning and local-to-model (commit 6dd0435), kept here only so that
+/// every run measures before and after side by side under the same machine load.
+mod before {
+    use sinew_core::glam::{Mat3A, Mat4, Vec3, Vec3A, Vec4};
+    use sinew_core::{Transform, MAX_INFLUENCES};
+
+    pub fn local_to_model_and_palette(
+        parents: &[Option<u16>],
+        locals: &[Transform],
+        inverse_bind: &[Mat4],
+        models: &mut [Mat4],
+        palette: &mut [Mat4],
+    ) {
+        for i in 0..parents.len() {
+            models[i] = match parents[i] {
+                Some(p) => mul_srt(&models[p as usize], &locals[i]),
+                None => locals[i].to_mat4(),
+            };
+        }
+        for ((m, ib), out) in models.iter().zip(inverse_bind).zip(palette.iter_mut()) {
+            *out = mul_affine(m, ib);
+        }
+    }
+
+    pub fn skin(
+        palette: &[Mat4],
+        positions: &[Vec3],
+        normals: &[Vec3],
+        joints: &[[u16; MAX_INFLUENCES]],
+        weights: &[[f32; MAX_INFLUENCES]],
+        out_positions: &mut [Vec3],
+        out_normals: &mut [Vec3],
+    ) -> Option<()> {
+        let n = positions.len();
+        for v in 0..n {
+            let m = blend(palette, &joints[v], &weights[v])?;
+            out_positions[v] = transform_point(&m, positions[v]);
+            out_normals[v] = transform_normal(&m, normals[v]);
+        }
+        Some(())
+    }
+
+    /// `parent * local.to_mat4()` for an affine `parent` (bottom row `0 0 0 1`), without the terms that
+    /// multiply the local matrix's zero bottom row. For such a parent the result equals the full product.
+    #[inline(always)]
+    fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
+        let r = Mat3A::from_quat(local.rotation);
+        let s = local.scale;
+        let t = local.translation;
+        let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
+        let col = |c: Vec3A, k: f32| {
+            let c = c * k;
+            px * c.x + py * c.y + pz * c.z
+        };
+        Mat4::from_cols(
+            col(r.x_axis, s.x),
+            col(r.y_axis, s.y),
+            col(r.z_axis, s.z),
+            px * t.x + py * t.y + pz * t.z + pw,
+        )
+    }
+
+    /// `a * b` for affine matrices: `b`'s bottom row is taken as `0 0 0 1` (its stored bottom row is not
+    /// read). For affine inputs this equals the full product, up to the sign of zero components.
+    #[inline(always)]
+    fn mul_affine(a: &Mat4, b: &Mat4) -> Mat4 {
+        let (ax, ay, az, aw) = (a.x_axis, a.y_axis, a.z_axis, a.w_axis);
+        let col = |c: Vec4| ax * c.x + ay * c.y + az * c.z;
+        Mat4::from_cols(
+            col(b.x_axis),
+            col(b.y_axis),
+            col(b.z_axis),
+            col(b.w_axis) + aw,
+        )
+    }
+
+    /// The blended matrix's four columns (x, y, z axes and translation).
+    #[inline(always)]
+    fn blend(
+        palette: &[Mat4],
+        j: &[u16; MAX_INFLUENCES],
+        w: &[f32; MAX_INFLUENCES],
+    ) -> Option<[Vec4; 4]> {
+        let m0 = palette.get(j[0] as usize)?;
+        let m1 = palette.get(j[1] as usize)?;
+        let m2 = palette.get(j[2] as usize)?;
+        let m3 = palette.get(j[3] as usize)?;
+        let (w0, w1, w2, w3) = (w[0], w[1], w[2], w[3]);
+        Some([
+            m0.x_axis * w0 + m1.x_axis * w1 + m2.x_axis * w2 + m3.x_axis * w3,
+            m0.y_axis * w0 + m1.y_axis * w1 + m2.y_axis * w2 + m3.y_axis * w3,
+            m0.z_axis * w0 + m1.z_axis * w1 + m2.z_axis * w2 + m3.z_axis * w3,
+            m0.w_axis * w0 + m1.w_axis * w1 + m2.w_axis * w2 + m3.w_axis * w3,
+        ])
+    }
+
+    #[inline(always)]
+    fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
+        (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
+    }
+
+    #[inline(always)]
+    fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
+        let a0 = Vec3A::from_vec4(m[0]);
+        let a1 = Vec3A::from_vec4(m[1]);
+        let a2 = Vec3A::from_vec4(m[2]);
+        let c0 = a1.cross(a2);
+        let c1 = a2.cross(a0);
+        let c2 = a0.cross(a1);
+        let r = c0 * n.x + c1 * n.y + c2 * n.z;
+        let r = if a0.dot(c0) < 0.0 { -r } else { r };
+        Vec3::from(r.normalize_or_zero())
+    }
+}
+
+criterion_group!(wall_clock, wall);
+#[cfg(target_os = "linux")]
+criterion_group! {
+    name = cpu_time;
+    config = Criterion::default().with_measurement(ThreadCpu);
+    targets = cpu
+}
+#[cfg(target_os = "linux")]
+criterion_main!(wall_clock, cpu_time);
+#[cfg(not(target_os = "linux"))]
+criterion_main!(wall_clock);

@@ -40,7 +40,7 @@
 
 use crate::skeleton::JointIndex;
 use crate::Transform;
-use glam::{Quat, Vec3};
+use glam::{Quat, Vec3, Vec3A};
 
 /// Why a blend step was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -123,15 +123,15 @@ impl<'a> Layer<'a> {
 
 #[derive(Debug, Clone, Copy)]
 struct Accum {
-    translation: Vec3,
-    scale: Vec3,
+    translation: Vec3A,
+    scale: Vec3A,
     rotation: Quat,
     weight: f32,
 }
 
 const ZERO: Accum = Accum {
-    translation: Vec3::ZERO,
-    scale: Vec3::ZERO,
+    translation: Vec3A::ZERO,
+    scale: Vec3A::ZERO,
     rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 0.0),
     weight: 0.0,
 };
@@ -191,8 +191,8 @@ impl BlendBuffers {
             } else {
                 p.rotation
             };
-            a.translation += p.translation * w;
-            a.scale += p.scale * w;
+            a.translation += Vec3A::from(p.translation) * w;
+            a.scale += Vec3A::from(p.scale) * w;
             a.rotation += q * w;
             a.weight += w;
         }
@@ -219,11 +219,18 @@ impl BlendBuffers {
         }
         for ((a, b), o) in self.accum.iter().zip(bind).zip(out.iter_mut()) {
             let w = a.weight;
-            *o = if w >= 1.0 {
+            *o = if w == 1.0 {
+                // Dividing a non-NaN value by exactly 1 changes no bits: skip the two divisions.
                 Transform {
-                    translation: a.translation / w,
+                    translation: Vec3::from(a.translation),
                     rotation: a.rotation.normalize(),
-                    scale: a.scale / w,
+                    scale: Vec3::from(a.scale),
+                }
+            } else if w >= 1.0 {
+                Transform {
+                    translation: Vec3::from(a.translation / w),
+                    rotation: a.rotation.normalize(),
+                    scale: Vec3::from(a.scale / w),
                 }
             } else if w > 0.0 {
                 let rest = 1.0 - w;
@@ -233,9 +240,9 @@ impl BlendBuffers {
                     b.rotation
                 };
                 Transform {
-                    translation: a.translation + b.translation * rest,
+                    translation: Vec3::from(a.translation + Vec3A::from(b.translation) * rest),
                     rotation: (a.rotation + br * rest).normalize(),
-                    scale: a.scale + b.scale * rest,
+                    scale: Vec3::from(a.scale + Vec3A::from(b.scale) * rest),
                 }
             } else {
                 *b

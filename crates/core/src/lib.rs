@@ -28,7 +28,9 @@ pub use mesh::{
     projected_pixels, select_lod, Lod, Mesh, Submesh, DEFAULT_PIXEL_ERROR, MAX_INFLUENCES,
 };
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
-pub use skinning::{local_to_model, skin, skin_lod, skinning_palette, SkinError};
+pub use skinning::{
+    local_to_model, local_to_model_and_palette, skin, skin_lod, skinning_palette, SkinError,
+};
 pub use transform::Transform;
 
 pub use glam;

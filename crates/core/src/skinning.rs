@@ -11,7 +11,7 @@
 
 use crate::skeleton::JointIndex;
 use crate::{Lod, Transform, MAX_INFLUENCES};
-use glam::{Mat4, Vec3, Vec3A, Vec4};
+use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// Why a skinning step was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -61,6 +61,11 @@ fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinE
 /// Model-space matrices from local transforms: `models[i] = models[parent(i)] * locals[i].to_mat4()`,
 /// or `locals[i].to_mat4()` for a root. Parents must come before their children (as in a
 /// [`Skeleton`](crate::Skeleton)).
+///
+/// The product is the affine (3x4) one: it skips the terms that multiply the local matrix's zero
+/// bottom row, so for affine matrices the result is the full product's up to rounding (the rotation
+/// is multiplied into the parent before the scale is applied). Same bits as
+/// [`local_to_model_and_palette`]'s `models`.
 pub fn local_to_model(
     parents: &[Option<JointIndex>],
     locals: &[Transform],
@@ -69,6 +74,40 @@ pub fn local_to_model(
     let n = parents.len();
     same_len("locals", n, locals.len())?;
     same_len("models", n, models.len())?;
+    check_parents(parents)?;
+    for i in 0..n {
+        let m = model_of(parents, models, i, &locals[i]);
+        models[i] = m;
+    }
+    Ok(())
+}
+
+/// [`local_to_model`] and [`skinning_palette`] in one pass over the joints (the model matrix is still
+/// in registers when the palette entry is made). The results are bit-identical to calling the two
+/// functions one after the other.
+pub fn local_to_model_and_palette(
+    parents: &[Option<JointIndex>],
+    locals: &[Transform],
+    inverse_bind: &[Mat4],
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) -> Result<(), SkinError> {
+    let n = parents.len();
+    same_len("locals", n, locals.len())?;
+    same_len("models", n, models.len())?;
+    same_len("inverse bind matrices", n, inverse_bind.len())?;
+    same_len("palette", n, palette.len())?;
+    check_parents(parents)?;
+    let (inverse_bind, palette) = (&inverse_bind[..n], &mut palette[..n]);
+    for i in 0..n {
+        let m = model_of(parents, models, i, &locals[i]);
+        models[i] = m;
+        palette[i] = mul_affine(&m, &inverse_bind[i]);
+    }
+    Ok(())
+}
+
+fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
     for (i, p) in parents.iter().enumerate() {
         if let Some(p) = *p {
             if p as usize >= i {
@@ -79,19 +118,51 @@ pub fn local_to_model(
             }
         }
     }
-    for i in 0..n {
-        let local = locals[i].to_mat4();
-        models[i] = match parents[i] {
-            // `p < i` was checked above.
-            Some(p) => models[p as usize] * local,
-            None => local,
-        };
-    }
     Ok(())
 }
 
+/// Joint `i`'s model matrix from its parent's (already in `models`, checked to come before `i`).
+#[inline(always)]
+fn model_of(parents: &[Option<JointIndex>], models: &[Mat4], i: usize, local: &Transform) -> Mat4 {
+    match parents[i] {
+        Some(p) => mul_srt(&models[p as usize], local),
+        None => mul_srt(&Mat4::IDENTITY, local),
+    }
+}
+
+/// `parent * local.to_mat4()` for an affine `parent` (bottom row `0 0 0 1`), without the terms that
+/// multiply the local matrix's zero bottom row.
+///
+/// The rotation matrix is built directly in "splat" form (every entry broadcast to the four lanes of
+/// a SIMD register, with the same scalar formulas as glam's `Mat3A::from_quat`), so the product with
+/// the parent's columns needs no further shuffles: `column_i = (px*r0i + py*r1i + pz*r2i) * s_i`.
+#[inline(always)]
+fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
+    let q = Vec4::from(local.rotation);
+    let (x, y, z, w) = (q.xxxx(), q.yyyy(), q.zzzz(), q.wwww());
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, xy, xz) = (x * x2, x * y2, x * z2);
+    let (yy, yz, zz) = (y * y2, y * z2, z * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let one = Vec4::ONE;
+    let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
+    let s = local.scale;
+    let t = local.translation;
+    // Column i of R is (r0i, r1i, r2i).
+    let c0 = px * (one - (yy + zz)) + py * (xy + wz) + pz * (xz - wy);
+    let c1 = px * (xy - wz) + py * (one - (xx + zz)) + pz * (yz + wx);
+    let c2 = px * (xz + wy) + py * (yz - wx) + pz * (one - (xx + yy));
+    Mat4::from_cols(
+        c0 * s.x,
+        c1 * s.y,
+        c2 * s.z,
+        px * t.x + py * t.y + pz * t.z + pw,
+    )
+}
+
 /// The skinning palette: `palette[i] = models[i] * inverse_bind[i]`, which moves a bind-pose
-/// model-space point to where joint `i` carries it now.
+/// model-space point to where joint `i` carries it now. Matrices are taken as affine: the inverse bind
+/// matrices' bottom row is not read (it is `0 0 0 1` for any rigid, scaled or sheared bind).
 pub fn skinning_palette(
     models: &[Mat4],
     inverse_bind: &[Mat4],
@@ -100,9 +171,23 @@ pub fn skinning_palette(
     same_len("inverse bind matrices", models.len(), inverse_bind.len())?;
     same_len("palette", models.len(), palette.len())?;
     for ((m, ib), out) in models.iter().zip(inverse_bind).zip(palette.iter_mut()) {
-        *out = *m * *ib;
+        *out = mul_affine(m, ib);
     }
     Ok(())
+}
+
+/// `a * b` for affine matrices: `b`'s bottom row is taken as `0 0 0 1` (its stored bottom row is not
+/// read). For affine inputs this equals the full product, up to the sign of zero components.
+#[inline(always)]
+fn mul_affine(a: &Mat4, b: &Mat4) -> Mat4 {
+    let (ax, ay, az, aw) = (a.x_axis, a.y_axis, a.z_axis, a.w_axis);
+    let col = |c: Vec4| ax * c.x + ay * c.y + az * c.z;
+    Mat4::from_cols(
+        col(b.x_axis),
+        col(b.y_axis),
+        col(b.z_axis),
+        col(b.w_axis) + aw,
+    )
 }
 
 /// Linear blend skinning of positions and normals with four influences per vertex.
@@ -142,24 +227,57 @@ pub fn skin(
         same_len("normals", n, normals.len())?;
         same_len("output normals", n, out_normals.len())?;
     }
-    let weights = &weights[..n];
-    let out_positions = &mut out_positions[..n];
+    // Every per-vertex slice has length `n` (checked above), so the zips visit every vertex.
     if with_normals {
-        let normals = &normals[..n];
-        let out_normals = &mut out_normals[..n];
-        for v in 0..n {
-            let m = blend(palette, &joints[v], &weights[v], v)?;
-            out_positions[v] = transform_point(&m, positions[v]);
-            out_normals[v] = transform_normal(&m, normals[v]);
+        // Two passes per chunk of vertices: the first blends, writes the position and keeps the
+        // unnormalised normal and the determinant's three products; the second sums the
+        // determinant, corrects the sign and normalises. Separating the long
+        // square-root-and-divide latency from the blend lets the CPU overlap many vertices. The
+        // operations on each vertex are the same as in one pass.
+        let mut pending = [(Vec3A::ZERO, Vec3A::ZERO); CHUNK];
+        let chunks = positions
+            .chunks(CHUNK)
+            .zip(normals.chunks(CHUNK))
+            .zip(joints.chunks(CHUNK))
+            .zip(weights.chunks(CHUNK))
+            .zip(out_positions.chunks_mut(CHUNK))
+            .zip(out_normals.chunks_mut(CHUNK));
+        for (c, (((((ps, ns), js), ws), ops), ons)) in chunks.enumerate() {
+            let mut done = 0;
+            let mut error = None;
+            let vertices = ps.iter().zip(ns).zip(js).zip(ws).zip(ops.iter_mut());
+            for (((((p, n), j), w), op), r) in vertices.zip(pending.iter_mut()) {
+                match blend(palette, j, w, c * CHUNK + done) {
+                    Ok(m) => {
+                        *op = transform_point(&m, *p);
+                        *r = cofactor_normal(&m, *n);
+                        done += 1;
+                    }
+                    Err(e) => {
+                        error = Some(e);
+                        break;
+                    }
+                }
+            }
+            for (&(r, d), on) in pending[..done].iter().zip(ons.iter_mut()) {
+                *on = normalize_yzx(r, d);
+            }
+            if let Some(e) = error {
+                return Err(e);
+            }
         }
     } else {
-        for v in 0..n {
-            let m = blend(palette, &joints[v], &weights[v], v)?;
-            out_positions[v] = transform_point(&m, positions[v]);
+        let inputs = positions.iter().zip(joints).zip(weights).enumerate();
+        for ((v, ((p, j), w)), op) in inputs.zip(out_positions.iter_mut()) {
+            let m = blend(palette, j, w, v)?;
+            *op = transform_point(&m, *p);
         }
     }
     Ok(())
 }
+
+/// Vertices per chunk in [`skin`]'s two-pass loop (a 1 KiB stack buffer).
+const CHUNK: usize = 32;
 
 /// Skins one LOD's positions and normals with [`skin`]. A LOD without normals skins positions only
 /// (pass an empty `out_normals`). A static LOD (no joints) is a [`SkinError::Length`] on `joints`.
@@ -211,22 +329,44 @@ fn transform_point(m: &[Vec4; 4], p: Vec3) -> Vec3 {
     (m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3]).truncate()
 }
 
+/// `n` through the cofactor of `m`'s 3x3 part, not yet normalised, in `yzx` lane order, and the
+/// three products whose sum is the determinant of the 3x3 part (see [`normalize_yzx`]).
+///
+/// The three cross products share their shuffles: with `s_k = a_k.zxy()`, `s_a*b - a*s_b` is
+/// `(a × b).yzx()` (the same per-lane products and differences as `a.cross(b)`), so the sum is formed
+/// in `yzx` lane order and shuffled back once, after normalising.
 #[inline(always)]
-fn transform_normal(m: &[Vec4; 4], n: Vec3) -> Vec3 {
+fn cofactor_normal(m: &[Vec4; 4], n: Vec3) -> (Vec3A, Vec3A) {
     let a0 = Vec3A::from_vec4(m[0]);
     let a1 = Vec3A::from_vec4(m[1]);
     let a2 = Vec3A::from_vec4(m[2]);
-    let c0 = a1.cross(a2);
-    let c1 = a2.cross(a0);
-    let c2 = a0.cross(a1);
-    let r = c0 * n.x + c1 * n.y + c2 * n.z;
-    let r = if a0.dot(c0) < 0.0 { -r } else { r };
-    Vec3::from(r.normalize_or_zero())
+    let (s0, s1, s2) = (a0.zxy(), a1.zxy(), a2.zxy());
+    let c0 = s1 * a2 - a1 * s2; // (a1 × a2).yzx
+    let c1 = s2 * a0 - a2 * s0; // (a2 × a0).yzx
+    let c2 = s0 * a1 - a0 * s1; // (a0 × a1).yzx
+    let r = c0 * n.x + c1 * n.y + c2 * n.z; // (cofactor * n).yzx
+    (r, a0.yzx() * c0)
+}
+
+/// `r / |r|`, negated when the determinant (the sum of `d`'s lanes) is negative, shuffled from `yzx`
+/// back to `xyz` lane order; zero when `|r|` is zero or not finite. Divides by the signed length (no
+/// reciprocal).
+#[inline(always)]
+fn normalize_yzx(r: Vec3A, d: Vec3A) -> Vec3 {
+    let len = r.dot(r).sqrt();
+    if len > 0.0 && len < f32::INFINITY {
+        let det = d.element_sum();
+        let len = if det < 0.0 { -len } else { len };
+        Vec3::from((r / len).zxy())
+    } else {
+        Vec3::ZERO
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Quat;
 
     #[test]
     fn normals_under_non_uniform_scale_stay_perpendicular() {
@@ -262,6 +402,132 @@ mod tests {
         )
         .unwrap();
         assert_eq!(n[0], Vec3::new(-1.0, 0.0, 0.0));
+    }
+
+    #[test]
+    fn local_to_model_matches_the_plain_matrix_product() {
+        let parents = [None, Some(0), Some(1), Some(0)];
+        let locals = [
+            Transform::new(
+                Vec3::new(1.0, 2.0, 3.0),
+                Quat::from_rotation_y(0.7),
+                Vec3::ONE,
+            ),
+            Transform::new(
+                Vec3::new(0.5, -1.0, 0.0),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.3, -1.2, 2.0),
+                Vec3::new(1.0, 2.0, 0.5),
+            ),
+            Transform::new(Vec3::Z, Quat::from_rotation_x(-0.4), Vec3::splat(3.0)),
+            Transform::from_translation(Vec3::NEG_X),
+        ];
+        let mut models = [Mat4::IDENTITY; 4];
+        local_to_model(&parents, &locals, &mut models).unwrap();
+        let mut expected = [Mat4::IDENTITY; 4];
+        for i in 0..4 {
+            expected[i] = match parents[i] {
+                Some(p) => expected[p as usize] * locals[i].to_mat4(),
+                None => locals[i].to_mat4(),
+            };
+            assert!(models[i].abs_diff_eq(expected[i], 1e-5), "{i}");
+        }
+        let inverse: Vec<Mat4> = expected.iter().map(|m| m.inverse()).collect();
+        let mut palette = [Mat4::ZERO; 4];
+        skinning_palette(&models, &inverse, &mut palette).unwrap();
+        for p in palette {
+            assert!(p.abs_diff_eq(Mat4::IDENTITY, 1e-5), "{p}");
+        }
+    }
+
+    #[test]
+    fn fused_palette_is_bit_identical_to_the_two_steps() {
+        let parents = [None, Some(0), Some(1), Some(1), Some(3)];
+        let locals: Vec<Transform> = (0..5)
+            .map(|i| {
+                let f = i as f32;
+                Transform::new(
+                    Vec3::new(f, 1.0 - f, 0.5 * f),
+                    Quat::from_euler(glam::EulerRot::XYZ, 0.3 * f, -0.7 + f, 1.1 * f).normalize(),
+                    Vec3::new(1.0 + 0.1 * f, 1.0, 2.0 - 0.3 * f),
+                )
+            })
+            .collect();
+        let inverse_bind: Vec<Mat4> = (0..5)
+            .map(|i| {
+                Mat4::from_rotation_z(i as f32) * Mat4::from_translation(Vec3::splat(i as f32))
+            })
+            .collect();
+        let (mut m1, mut p1) = ([Mat4::ZERO; 5], [Mat4::ZERO; 5]);
+        local_to_model(&parents, &locals, &mut m1).unwrap();
+        skinning_palette(&m1, &inverse_bind, &mut p1).unwrap();
+        let (mut m2, mut p2) = ([Mat4::ZERO; 5], [Mat4::ZERO; 5]);
+        local_to_model_and_palette(&parents, &locals, &inverse_bind, &mut m2, &mut p2).unwrap();
+        let bits = |m: &[Mat4]| -> Vec<u32> {
+            m.iter()
+                .flat_map(|m| m.to_cols_array())
+                .map(f32::to_bits)
+                .collect()
+        };
+        assert_eq!(bits(&m1), bits(&m2));
+        assert_eq!(bits(&p1), bits(&p2));
+        // And a root's model matrix is its local matrix.
+        assert!(m1[0].abs_diff_eq(locals[0].to_mat4(), 1e-6));
+    }
+
+    #[test]
+    fn normals_match_the_inverse_transpose() {
+        // Rotations, non-uniform scales, shears and mirrors; expected is normalize((A^-1)^T n),
+        // computed with glam's general inverse (independent of the cofactor code).
+        let mats = [
+            Mat4::from_scale_rotation_translation(
+                Vec3::new(2.0, 0.5, 1.5),
+                Quat::from_euler(glam::EulerRot::XYZ, 0.4, -1.3, 2.2),
+                Vec3::new(1.0, -2.0, 3.0),
+            ),
+            Mat4::from_scale(Vec3::new(-1.0, 3.0, 0.25)),
+            Mat4::from_cols_array(&[
+                1.0, 0.2, -0.3, 0.0, 0.5, 1.5, 0.1, 0.0, -0.4, 0.3, 0.8, 0.0, 4.0, 5.0, 6.0, 1.0,
+            ]),
+        ];
+        let normals = [
+            Vec3::X,
+            Vec3::new(0.3, -0.9, 0.2).normalize(),
+            Vec3::new(-0.5, 0.5, 0.7).normalize(),
+        ];
+        for (k, m) in mats.iter().enumerate() {
+            for n in normals {
+                let mut out_n = [Vec3::ZERO];
+                let mut out_p = [Vec3::ZERO];
+                skin(
+                    &[*m],
+                    &[Vec3::ONE],
+                    &[n],
+                    &[[0; 4]],
+                    &[[1.0, 0.0, 0.0, 0.0]],
+                    &mut out_p,
+                    &mut out_n,
+                )
+                .unwrap();
+                let a = glam::Mat3::from_mat4(*m);
+                let e = (a.inverse().transpose() * n).normalize();
+                assert!((out_n[0] - e).length() < 1e-6, "{k}: {} vs {e}", out_n[0]);
+                assert!((out_p[0] - m.transform_point3(Vec3::ONE)).length() < 1e-5);
+            }
+        }
+        // A zero normal stays zero.
+        let mut out_n = [Vec3::ONE];
+        let mut out_p = [Vec3::ZERO];
+        skin(
+            &mats[..1],
+            &[Vec3::ONE],
+            &[Vec3::ZERO],
+            &[[0; 4]],
+            &[[1.0, 0.0, 0.0, 0.0]],
+            &mut out_p,
+            &mut out_n,
+        )
+        .unwrap();
+        assert_eq!(out_n[0], Vec3::ZERO);
     }
 
     #[test]

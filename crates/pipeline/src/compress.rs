@@ -470,7 +470,7 @@ fn mean_quat(v: &[Quat]) -> Quat {
     let first = v.first().copied().unwrap_or(Quat::IDENTITY);
     let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
     for q in v {
-        acc = acc + if q.dot(first) < 0.0 { -*q } else { *q };
+        acc += if q.dot(first) < 0.0 { -*q } else { *q };
     }
     if acc.length() > 1e-6 {
         acc.normalize()
@@ -504,6 +504,7 @@ fn simplify_channels(
             }
         })
         .collect();
+    #[allow(clippy::needless_range_loop)] // `work` is replaced inside the loop
     for i in 0..work.tracks.len() {
         for ch in 0..3 {
             let mut candidates: Vec<Work> = Vec::new();
@@ -574,7 +575,7 @@ fn reduce_keys(
     let mut lerped = poses[0].clone();
     let mut ok = |a: usize, b: usize| -> bool {
         let (ta, tb) = (work.times[a], work.times[b]);
-        for k in a + 1..b {
+        for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
             let x = (work.times[k] - ta) / (tb - ta);
             for (j, out) in lerped.iter_mut().enumerate() {
                 let (p, q) = (poses[a][j], poses[b][j]);
@@ -585,7 +586,7 @@ fn reduce_keys(
                 };
             }
             rig.points_of(&lerped, &mut m, &mut pts);
-            if point_error(&src[k], &pts).any(|e| e > budget) {
+            if point_error(src_k, &pts).any(|e| e > budget) {
                 return false;
             }
         }

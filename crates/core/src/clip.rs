@@ -827,11 +827,11 @@ fn sample_quantized(
             Channel::Bind => default.rotation,
             Channel::Constant(r) => r,
             Channel::Animated(o) => {
-                let q0 = f0.quat(o as usize);
+                let q0 = f0.quat_raw(o as usize);
                 if exact {
-                    q0
+                    q0.normalize()
                 } else {
-                    nlerp(q0, f1.quat(o as usize), a)
+                    nlerp(q0, f1.quat_raw(o as usize), a)
                 }
             }
         };

@@ -108,16 +108,19 @@ pub fn smallest_three(q: Quat) -> (u8, [f32; 3]) {
 /// Rebuilds a unit quaternion from [`smallest_three`]'s output.
 #[inline]
 pub fn from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
-    let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2])
-        .max(0.0)
-        .sqrt();
-    let q = match index & 3 {
-        0 => Quat::from_xyzw(w, v[0], v[1], v[2]),
-        1 => Quat::from_xyzw(v[0], w, v[1], v[2]),
-        2 => Quat::from_xyzw(v[0], v[1], w, v[2]),
-        _ => Quat::from_xyzw(v[0], v[1], v[2], w),
-    };
-    q.normalize()
+    raw_from_smallest_three(index, v).normalize()
+}
+
+/// Where x y z w come from in `[v0, v1, v2, w]`, per index of the largest component.
+const PERM: [[usize; 4]; 4] = [[3, 0, 1, 2], [0, 3, 1, 2], [0, 1, 3, 2], [0, 1, 2, 3]];
+
+/// [`from_smallest_three`] without the final normalisation (unit up to quantization error).
+#[inline]
+pub(crate) fn raw_from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
+    let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2]).max(0.0).sqrt();
+    let src = [v[0], v[1], v[2], w];
+    let p = PERM[(index & 3) as usize];
+    Quat::from_xyzw(src[p[0]], src[p[1]], src[p[2]], src[p[3]])
 }
 
 /// Bit offsets of every component inside a key record, and the record size. `rotation_starts[c]` is
@@ -313,10 +316,11 @@ impl KeyRef<'_> {
     #[inline]
     fn bits(&self, bit: usize) -> u64 {
         let byte = bit >> 3;
-        let mut w = [0u8; 8];
-        if let Some(s) = self.data.get(byte..byte + 8) {
-            w.copy_from_slice(s);
-        }
+        let w = self
+            .data
+            .get(byte..byte + 8)
+            .and_then(|s| <[u8; 8]>::try_from(s).ok())
+            .unwrap_or_default();
         u64::from_le_bytes(w) >> (bit & 7)
     }
     /// Component `c`'s decoded value.
@@ -334,11 +338,16 @@ impl KeyRef<'_> {
     /// The rotation whose first component is `c`.
     #[inline]
     pub(crate) fn quat(&self, c: usize) -> Quat {
+        self.quat_raw(c).normalize()
+    }
+    /// [`KeyRef::quat`] before normalisation (for callers that normalise after blending).
+    #[inline]
+    pub(crate) fn quat_raw(&self, c: usize) -> Quat {
         let Some(d) = self.dec.get(c) else {
             return Quat::IDENTITY;
         };
         let idx = (self.bits(self.base + d.off as usize - 2) & 3) as u32;
-        from_smallest_three(idx, [self.value(c), self.value(c + 1), self.value(c + 2)])
+        raw_from_smallest_three(idx, [self.value(c), self.value(c + 1), self.value(c + 2)])
     }
 }
 

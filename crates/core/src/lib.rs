@@ -27,7 +27,9 @@ pub use blend::{apply_additive, BlendBuffers, BlendError, Layer};
 pub use clip::{
     Channel, ChannelEncoding, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves,
 };
-pub use mesh::{Lod, Mesh, Submesh, MAX_INFLUENCES};
+pub use mesh::{
+    projected_pixels, select_lod, Lod, Mesh, Submesh, DEFAULT_PIXEL_ERROR, MAX_INFLUENCES,
+};
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
 pub use skinning::{local_to_model, skin, skin_lod, skinning_palette, SkinError};
 pub use transform::Transform;

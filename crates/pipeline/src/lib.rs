@@ -5,7 +5,10 @@
 pub mod cache;
 pub mod compile;
 pub mod compress;
+pub mod cut;
 pub mod lod;
 pub mod mapping;
 pub mod retarget;
 pub mod split;
+
+pub use cut::{cut_clips, CutError};

@@ -117,7 +117,9 @@ const PERM: [[usize; 4]; 4] = [[3, 0, 1, 2], [0, 3, 1, 2], [0, 1, 3, 2], [0, 1, 
 /// [`from_smallest_three`] without the final normalisation (unit up to quantization error).
 #[inline]
 pub(crate) fn raw_from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
-    let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2]).max(0.0).sqrt();
+    let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2])
+        .max(0.0)
+        .sqrt();
     let src = [v[0], v[1], v[2], w];
     let p = PERM[(index & 3) as usize];
     Quat::from_xyzw(src[p[0]], src[p[1]], src[p[2]], src[p[3]])

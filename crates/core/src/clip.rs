@@ -25,6 +25,7 @@
 //! rotation to apply before the base rotation (`delta * base`), and a scale factor. Missing channels of an
 //! additive clip are the identity difference.
 
+use crate::compressed::{Quantized, QuantizedParts};
 use crate::skeleton::{JointIndex, Skeleton};
 use crate::Transform;
 use glam::{Quat, Vec3};
@@ -126,6 +127,27 @@ pub enum ClipError {
     /// The binding was made for another clip or skeleton.
     #[error("binding does not belong to this clip and skeleton")]
     BindingMismatch,
+    /// A compressed clip's payload does not match its layout (see [`crate::compressed`]).
+    #[error("compressed clip: {0}")]
+    BadCompressed(String),
+}
+
+/// How one channel of a track is stored, for inspection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChannelEncoding {
+    /// Not stored: the bind value (identity difference in an additive clip).
+    Bind,
+    /// One f32 value.
+    Constant,
+    /// Plain f32 values in every frame.
+    F32,
+    /// Quantized components; rotations as the three smallest components plus a 2-bit index.
+    Quantized {
+        /// Per component, the smallest bit width over all segments.
+        min_bits: [u8; 3],
+        /// Per component, the largest bit width over all segments.
+        max_bits: [u8; 3],
+    },
 }
 
 /// Shared, immutable animation data. See the module docs for its time semantics.
@@ -140,6 +162,7 @@ pub struct Clip {
     tracks: Vec<Track>,
     stride: usize,
     frames: Vec<f32>,
+    quantized: Option<Box<Quantized>>,
 }
 
 fn check_curve<T>(joint: &str, c: &Curve<T>, finite: impl Fn(&T) -> bool) -> Result<(), ClipError> {
@@ -376,7 +399,146 @@ impl Clip {
             tracks,
             stride,
             frames,
+            quantized: None,
         })
+    }
+
+    /// Assembles a compressed clip: key times and tracks as in [`Clip::from_parts`], but every animated
+    /// channel is numbered by its first component in [`crate::compressed`]'s order (components are
+    /// numbered consecutively over the tracks' translation, rotation and scale channels), and the values
+    /// come from `parts`. Every part is checked; a bad payload is [`ClipError::BadCompressed`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_quantized(
+        name: String,
+        duration: f32,
+        sample_rate: f32,
+        looping: bool,
+        additive: bool,
+        times: Vec<f32>,
+        tracks: Vec<Track>,
+        parts: QuantizedParts,
+    ) -> Result<Clip, ClipError> {
+        let starts = rotation_starts(&tracks).map_err(ClipError::BadOffset)?;
+        let keys = times.len();
+        let mut clip = Clip::from_parts(
+            name,
+            duration,
+            sample_rate,
+            looping,
+            additive,
+            times,
+            tracks
+                .iter()
+                .map(|t| Track {
+                    joint: t.joint.clone(),
+                    translation: plain_only(t.translation),
+                    rotation: plain_only(t.rotation),
+                    scale: plain_only(t.scale),
+                })
+                .collect(),
+            0,
+            Vec::new(),
+        )?;
+        if !starts.is_empty() && clip.duration < clip.times[clip.times.len() - 1] {
+            return Err(ClipError::BadDuration(clip.duration));
+        }
+        clip.tracks = tracks;
+        clip.quantized = Some(Box::new(Quantized::new(parts, keys, &starts)?));
+        Ok(clip)
+    }
+
+    /// True when the clip's animated channels are quantized (see [`crate::compressed`]).
+    pub fn is_compressed(&self) -> bool {
+        self.quantized.is_some()
+    }
+
+    /// The compressed payload, for writers and inspection.
+    pub fn quantized_parts(&self) -> Option<&QuantizedParts> {
+        self.quantized.as_deref().map(|q| &q.parts)
+    }
+
+    /// How each channel (translation, rotation, scale) of track `track` is stored.
+    pub fn channel_encodings(&self, track: usize) -> Option<[ChannelEncoding; 3]> {
+        let t = self.tracks.get(track)?;
+        let enc = |c: Option<u32>, constant: bool| match (c, &self.quantized) {
+            (None, _) if constant => ChannelEncoding::Constant,
+            (None, _) => ChannelEncoding::Bind,
+            (Some(_), None) => ChannelEncoding::F32,
+            (Some(first), Some(q)) => {
+                let mut min_bits = [0; 3];
+                let mut max_bits = [0; 3];
+                for i in 0..3 {
+                    (min_bits[i], max_bits[i]) = q.bit_range(first as usize + i);
+                }
+                ChannelEncoding::Quantized { min_bits, max_bits }
+            }
+        };
+        Some([
+            enc(
+                animated(t.translation),
+                matches!(t.translation, Channel::Constant(_)),
+            ),
+            enc(
+                animated(t.rotation),
+                matches!(t.rotation, Channel::Constant(_)),
+            ),
+            enc(animated(t.scale), matches!(t.scale, Channel::Constant(_))),
+        ])
+    }
+
+    /// The same clip with plain f32 frames: every key decoded (a plain clip is returned as a copy).
+    pub fn to_plain(&self) -> Clip {
+        let Some(q) = &self.quantized else {
+            return self.clone();
+        };
+        let mut stride = 0u32;
+        let mut tracks = Vec::with_capacity(self.tracks.len());
+        let mut next = |c: Option<u32>, n: u32| {
+            c.map(|_| {
+                stride += n;
+                stride - n
+            })
+        };
+        for t in &self.tracks {
+            let at = |c: Channel<Vec3>, o: Option<u32>| o.map_or(c, Channel::Animated);
+            let ot = next(animated(t.translation), 3);
+            let or = next(animated(t.rotation), 4);
+            let os = next(animated(t.scale), 3);
+            tracks.push(Track {
+                joint: t.joint.clone(),
+                translation: at(t.translation, ot),
+                rotation: or.map_or(t.rotation, Channel::Animated),
+                scale: at(t.scale, os),
+            });
+        }
+        let stride = stride as usize;
+        let mut frames = vec![0.0f32; stride * self.times.len()];
+        for (k, frame) in frames.chunks_exact_mut(stride.max(1)).enumerate() {
+            let key = q.key(k);
+            for (src, dst) in self.tracks.iter().zip(&tracks) {
+                if let (Channel::Animated(c), Channel::Animated(o)) =
+                    (src.translation, dst.translation)
+                {
+                    frame[o as usize..o as usize + 3]
+                        .copy_from_slice(&key.vec3(c as usize).to_array());
+                }
+                if let (Channel::Animated(c), Channel::Animated(o)) = (src.rotation, dst.rotation) {
+                    frame[o as usize..o as usize + 4]
+                        .copy_from_slice(&key.quat(c as usize).to_array());
+                }
+                if let (Channel::Animated(c), Channel::Animated(o)) = (src.scale, dst.scale) {
+                    frame[o as usize..o as usize + 3]
+                        .copy_from_slice(&key.vec3(c as usize).to_array());
+                }
+            }
+        }
+        Clip {
+            tracks,
+            stride,
+            frames,
+            quantized: None,
+            ..self.clone()
+        }
     }
 
     /// Clip name.
@@ -577,6 +739,10 @@ impl Sampler {
         }
         let t = clip.local_time(t);
         let (k0, k1, a) = self.locate(clip, t);
+        if let Some(q) = &clip.quantized {
+            sample_quantized(clip, q, binding, skeleton, (k0, k1, a), out);
+            return Ok(());
+        }
         let s = clip.stride;
         let f0 = &clip.frames[k0 * s..(k0 + 1) * s];
         let f1 = &clip.frames[k1 * s..(k1 + 1) * s];
@@ -621,6 +787,98 @@ impl Sampler {
         }
         Ok(())
     }
+}
+
+/// The compressed counterpart of the plain loop in [`Sampler::sample`] (same rules, quantized source).
+fn sample_quantized(
+    clip: &Clip,
+    q: &Quantized,
+    binding: &ClipBinding,
+    skeleton: &Skeleton,
+    (k0, k1, a): (usize, usize, f32),
+    out: &mut [Transform],
+) {
+    let f0 = q.key(k0);
+    let f1 = q.key(k1);
+    let exact = a == 0.0;
+    let bind = skeleton.bind_local();
+    for (track, joint) in clip.tracks.iter().zip(&binding.joint_of_track) {
+        let Some(j) = *joint else { continue };
+        let j = j as usize;
+        let default = if clip.additive {
+            Transform::IDENTITY
+        } else {
+            bind.get(j).copied().unwrap_or(Transform::IDENTITY)
+        };
+        let vec = |c: Channel<Vec3>, d: Vec3| match c {
+            Channel::Bind => d,
+            Channel::Constant(v) => v,
+            Channel::Animated(o) => {
+                let v0 = f0.vec3(o as usize);
+                if exact {
+                    v0
+                } else {
+                    v0.lerp(f1.vec3(o as usize), a)
+                }
+            }
+        };
+        let translation = vec(track.translation, default.translation);
+        let rotation = match track.rotation {
+            Channel::Bind => default.rotation,
+            Channel::Constant(r) => r,
+            Channel::Animated(o) => {
+                let q0 = f0.quat_raw(o as usize);
+                if exact {
+                    q0.normalize()
+                } else {
+                    nlerp(q0, f1.quat_raw(o as usize), a)
+                }
+            }
+        };
+        let scale = vec(track.scale, default.scale);
+        if let Some(slot) = out.get_mut(j) {
+            *slot = Transform {
+                translation,
+                rotation,
+                scale,
+            };
+        }
+    }
+}
+
+fn animated<T>(c: Channel<T>) -> Option<u32> {
+    match c {
+        Channel::Animated(o) => Some(o),
+        _ => None,
+    }
+}
+
+fn plain_only<T>(c: Channel<T>) -> Channel<T> {
+    match c {
+        Channel::Animated(_) => Channel::Bind,
+        other => other,
+    }
+}
+
+/// The component layout of compressed tracks: for each component, whether it starts a rotation.
+/// Fails (naming the joint) unless animated channels are numbered consecutively in track order.
+pub(crate) fn rotation_starts(tracks: &[Track]) -> Result<Vec<bool>, String> {
+    let mut starts = Vec::new();
+    for t in tracks {
+        for (c, rot) in [
+            (animated(t.translation), false),
+            (animated(t.rotation), true),
+            (animated(t.scale), false),
+        ] {
+            if let Some(first) = c {
+                if first as usize != starts.len() {
+                    return Err(t.joint.clone());
+                }
+                starts.extend([rot, false, false]);
+            }
+        }
+    }
+    Ok(starts)
 }
 
 #[inline]

@@ -15,6 +15,7 @@
 pub mod animator;
 pub mod blend;
 pub mod clip;
+pub mod compressed;
 pub mod format;
 pub mod mesh;
 pub mod skeleton;
@@ -23,7 +24,9 @@ pub mod transform;
 
 pub use animator::{Animator, AnimatorError, ClipId};
 pub use blend::{apply_additive, BlendBuffers, BlendError, Layer};
-pub use clip::{Channel, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves};
+pub use clip::{
+    Channel, ChannelEncoding, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves,
+};
 pub use mesh::{
     projected_pixels, select_lod, Lod, Mesh, Submesh, DEFAULT_PIXEL_ERROR, MAX_INFLUENCES,
 };

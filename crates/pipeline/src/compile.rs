@@ -11,6 +11,7 @@
 //!
 //! The result is checked with [`format::validate`], so compiling succeeds exactly when writing will.
 
+use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions};
 use sinew_core::format::{self, Asset, FormatError, LodInfo, Material};
 use sinew_core::{Clip, ClipError, Mesh};
 use sinew_scene::Scene;
@@ -94,6 +95,48 @@ pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
     };
     format::validate(&asset)?;
     Ok(asset)
+}
+
+/// Options of [`compile_with`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompileOptions {
+    /// Compress clips with these options; `None` keeps plain f32 clips. Default: compression on, with
+    /// [`CompressOptions::default`] (tolerance and distance relative to the skeleton's size).
+    pub compress: Option<CompressOptions>,
+}
+
+impl Default for CompileOptions {
+    fn default() -> Self {
+        Self {
+            compress: Some(CompressOptions::default()),
+        }
+    }
+}
+
+/// What [`compile_with`] reports besides the asset.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct CompileReport {
+    /// One entry per clip, in clip order, when compression was on.
+    pub clips: Vec<ClipCompressionReport>,
+}
+
+/// Compiles a scene like [`compile`], then compresses every clip when `options.compress` is set
+/// (each within its tolerance, measured against the scene's skeleton; see [`crate::compress`]).
+pub fn compile_with(
+    scene: &Scene,
+    options: &CompileOptions,
+) -> Result<(Asset, CompileReport), CompileError> {
+    let mut asset = compile(scene)?;
+    let mut report = CompileReport::default();
+    if let Some(o) = &options.compress {
+        for clip in &mut asset.clips {
+            let (c, r) = compress_clip(clip, asset.skeleton.as_ref(), o);
+            *clip = c;
+            report.clips.push(r);
+        }
+        format::validate(&asset)?;
+    }
+    Ok((asset, report))
 }
 
 /// Compiles a scene and encodes it as `.sinew` bytes.
@@ -242,6 +285,29 @@ mod tests {
         // The constant translation comes back as one key at 0 instead of 0.2; it compiles the same.
         assert_eq!(back.clips[0].tracks[0].translation.times, [0.0]);
         assert_eq!(compile_to_bytes(&back).unwrap(), bytes);
+    }
+
+    #[test]
+    fn compile_with_compresses_clips_within_tolerance_and_reports_them() {
+        let (asset, report) = compile_with(&scene(), &CompileOptions::default()).unwrap();
+        let plain = compile(&scene()).unwrap();
+        assert_eq!(report.clips.len(), 1);
+        let r = &report.clips[0];
+        assert_eq!(r.clip, "kick");
+        // One animated joint (the leg's rotation), three source keys: 3 x 40 bytes raw.
+        assert_eq!((r.animated_joints, r.samples, r.raw_bytes), (1, 3, 120));
+        assert!(r.max_error <= r.tolerance, "{r:?}");
+        // The extent of the skeleton is 0.5 (hips to leg), so the default tolerance is 0.00025.
+        assert!((r.tolerance - 0.5 * crate::compress::DEFAULT_RELATIVE_TOLERANCE).abs() < 1e-9);
+        let bytes = format::write(&asset).unwrap();
+        assert_eq!(format::read(&bytes).unwrap(), asset);
+        assert!(asset.clips[0].is_compressed());
+        assert!(
+            format::clip_record_size(&asset.clips[0]) < format::clip_record_size(&plain.clips[0])
+        );
+        let (off, none) = compile_with(&scene(), &CompileOptions { compress: None }).unwrap();
+        assert_eq!(off, plain);
+        assert!(none.clips.is_empty());
     }
 
     #[test]

@@ -4,6 +4,7 @@
 
 pub mod cache;
 pub mod compile;
+pub mod compress;
 pub mod cut;
 pub mod lod;
 pub mod mapping;

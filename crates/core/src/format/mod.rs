@@ -15,7 +15,7 @@ mod write;
 
 pub use error::{FormatError, FormatErrorKind};
 pub use read::{read, sections};
-pub use write::write;
+pub use write::{clip_record_size, write};
 
 use crate::{Clip, Lod, Mesh, Skeleton};
 use std::fmt;
@@ -27,6 +27,8 @@ pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
 pub const VERSION_MAJOR: u16 = 1;
 /// Minor version this crate writes. Files with a higher minor version still load.
 pub const VERSION_MINOR: u16 = 0;
+/// Minor version written when a file holds compressed clips (clip flag bit 2), which 1.0 readers reject.
+pub const VERSION_MINOR_COMPRESSED: u16 = 1;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).

@@ -2,7 +2,7 @@
 
 use super::{
     validate, Asset, FormatError, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
-    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPRESSED,
 };
 use crate::clip::Channel;
 use crate::{Clip, Mesh, Skeleton};
@@ -30,11 +30,17 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
         sections.push((Tag::CLIPS, clips(&asset.clips, &mut strings)));
     }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
-    Ok(assemble(&sections))
+    let minor = if asset.clips.iter().any(Clip::is_compressed) {
+        VERSION_MINOR_COMPRESSED
+    } else {
+        VERSION_MINOR
+    };
+    Ok(assemble_minor(&sections, minor))
 }
 
 /// Header, section table, then each section at the next multiple of [`ALIGN`], zero padding between.
-pub(crate) fn assemble(sections: &[(Tag, Vec<u8>)]) -> Vec<u8> {
+/// The minor version goes into the header.
+pub(crate) fn assemble_minor(sections: &[(Tag, Vec<u8>)], minor: u16) -> Vec<u8> {
     let table_offset = HEADER_SIZE;
     let mut offset = pad_to(table_offset + sections.len() * SECTION_ENTRY_SIZE);
     let mut end = offset;
@@ -54,7 +60,7 @@ pub(crate) fn assemble(sections: &[(Tag, Vec<u8>)]) -> Vec<u8> {
     let mut out = Buf::default();
     out.bytes(&MAGIC);
     out.u16(VERSION_MAJOR);
-    out.u16(VERSION_MINOR);
+    out.u16(minor);
     out.u32(0); // flags
     out.u64(file_size as u64);
     out.u64(table_offset as u64);
@@ -316,6 +322,108 @@ fn vec_channel(b: &mut Buf, c: Channel<glam::Vec3>) {
     }
 }
 
+/// Clip flag: quantized (compressed) record layout.
+pub(crate) const CLIP_QUANTIZED: u32 = 4;
+/// Compressed track table kind: quantized animated channel.
+pub(crate) const KIND_QUANTIZED: u8 = 3;
+
+/// Bytes of one clip record as [`write`] lays it out (from the record's first byte to the end of its
+/// data, alignment padding before it not counted; joint names live in the string table and are not
+/// counted). Plain and compressed clips alike: this is the size `convert` reports.
+pub fn clip_record_size(clip: &Clip) -> usize {
+    let mut strings = Strings::default();
+    let mut b = Buf::default();
+    clip_record(&mut b, clip, &mut strings);
+    b.0.len()
+}
+
+fn compressed_record(
+    b: &mut Buf,
+    c: &Clip,
+    parts: &crate::compressed::QuantizedParts,
+    strings: &mut Strings,
+) {
+    let start = b.0.len();
+    let mut flags = CLIP_QUANTIZED;
+    if c.looping() {
+        flags |= CLIP_LOOPING;
+    }
+    if c.additive() {
+        flags |= CLIP_ADDITIVE;
+    }
+    b.u32(strings.get(c.name()));
+    b.u32(flags);
+    b.f32(c.duration());
+    b.f32(c.sample_rate());
+    b.u32(c.times().len() as u32);
+    b.u32(parts.ranges.len() as u32);
+    b.u32(c.tracks().len() as u32);
+    b.u32(parts.segment_len);
+    b.f32s(c.times());
+    align_from(b, start);
+    let kind = |c: bool, a: bool| {
+        if a {
+            KIND_QUANTIZED
+        } else if c {
+            KIND_CONSTANT
+        } else {
+            KIND_BIND
+        }
+    };
+    let mut constants = Vec::new();
+    for t in c.tracks() {
+        b.u32(strings.get(&t.joint));
+        let mut kinds = [0u8; 4];
+        for (i, (is_const, is_anim)) in [
+            (
+                matches!(t.translation, Channel::Constant(_)),
+                matches!(t.translation, Channel::Animated(_)),
+            ),
+            (
+                matches!(t.rotation, Channel::Constant(_)),
+                matches!(t.rotation, Channel::Animated(_)),
+            ),
+            (
+                matches!(t.scale, Channel::Constant(_)),
+                matches!(t.scale, Channel::Animated(_)),
+            ),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            kinds[i] = kind(is_const, is_anim);
+        }
+        b.bytes(&kinds);
+        if let Channel::Constant(v) = t.translation {
+            constants.extend_from_slice(&v.to_array());
+        }
+        if let Channel::Constant(q) = t.rotation {
+            constants.extend_from_slice(&q.to_array());
+        }
+        if let Channel::Constant(v) = t.scale {
+            constants.extend_from_slice(&v.to_array());
+        }
+    }
+    align_from(b, start);
+    b.f32s(&constants);
+    align_from(b, start);
+    for r in &parts.ranges {
+        b.f32s(r);
+    }
+    align_from(b, start);
+    for s in &parts.segments {
+        b.bytes(&[s.bits, s.min, s.extent]);
+    }
+    align_from(b, start);
+    b.bytes(&parts.data);
+}
+
+/// Pads relative to `start` (clip records start aligned inside the section).
+fn align_from(b: &mut Buf, start: usize) {
+    let n = pad_to(b.0.len() - start) - (b.0.len() - start);
+    b.zeros(n);
+}
+
 fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
     let mut b = Buf::default();
     b.u32(list.len() as u32);
@@ -323,6 +431,18 @@ fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
     b.zeros(8);
     for c in list {
         b.align();
+        clip_record(&mut b, c, strings);
+    }
+    b.0
+}
+
+fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) {
+    if let Some(parts) = c.quantized_parts() {
+        compressed_record(b, c, parts, strings);
+        return;
+    }
+    let start = b.0.len();
+    {
         let mut flags = 0;
         if c.looping() {
             flags |= CLIP_LOOPING;
@@ -339,21 +459,18 @@ fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
         b.u32(c.tracks().len() as u32);
         b.u32(0);
         b.f32s(c.times());
-        b.align();
+        align_from(b, start);
         for t in c.tracks() {
             b.u32(strings.get(&t.joint));
-            vec_channel(&mut b, t.translation);
+            vec_channel(b, t.translation);
             match t.rotation {
-                Channel::Bind => channel(&mut b, KIND_BIND, [0; 4]),
-                Channel::Constant(q) => {
-                    channel(&mut b, KIND_CONSTANT, q.to_array().map(f32::to_bits))
-                }
-                Channel::Animated(o) => channel(&mut b, KIND_ANIMATED, [o, 0, 0, 0]),
+                Channel::Bind => channel(b, KIND_BIND, [0; 4]),
+                Channel::Constant(q) => channel(b, KIND_CONSTANT, q.to_array().map(f32::to_bits)),
+                Channel::Animated(o) => channel(b, KIND_ANIMATED, [o, 0, 0, 0]),
             }
-            vec_channel(&mut b, t.scale);
+            vec_channel(b, t.scale);
         }
-        b.align();
+        align_from(b, start);
         b.f32s(c.frames());
     }
-    b.0
 }

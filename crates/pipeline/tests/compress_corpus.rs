@@ -1,0 +1,224 @@
+//! Every animated clip of the corpus, compressed, written, read back and sampled by the runtime, stays
+//! within its tolerance by this file's own forward kinematics, and is smaller than the plain clip.
+
+#![allow(clippy::unwrap_used)]
+
+use sinew_core::format::{self, clip_record_size, Asset};
+use sinew_core::glam::{Mat4, Quat, Vec3};
+use sinew_core::{Clip, ClipBinding, Curve, Sampler, Skeleton, Transform};
+use sinew_pipeline::compile::compile;
+use sinew_pipeline::compress::{compress_clip, CompressOptions};
+use sinew_scene::{Scene, SceneClip};
+
+/// Linear curve value at a time (clamped), written independently of the core.
+fn at<T: Copy>(c: &Curve<T>, t: f32, lerp: impl Fn(T, T, f32) -> T) -> Option<T> {
+    let first = *c.values.first()?;
+    if t <= c.times[0] {
+        return Some(first);
+    }
+    for i in 1..c.times.len() {
+        if t <= c.times[i] {
+            let a = (t - c.times[i - 1]) / (c.times[i] - c.times[i - 1]);
+            return Some(lerp(c.values[i - 1], c.values[i], a));
+        }
+    }
+    c.values.last().copied()
+}
+
+fn slerpish(a: Quat, b: Quat, x: f32) -> Quat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    (a * (1.0 - x) + b * x).normalize()
+}
+
+/// Joint names, parents and bind poses: the skeleton's, then one root per track it lacks.
+fn rig(
+    skeleton: Option<&Skeleton>,
+    clip: &SceneClip,
+) -> (Vec<String>, Vec<Option<usize>>, Vec<Transform>) {
+    let (mut n, mut p, mut b) = match skeleton {
+        Some(s) => (
+            s.names().to_vec(),
+            s.parents().iter().map(|p| p.map(usize::from)).collect(),
+            s.bind_local().to_vec(),
+        ),
+        None => (vec![], vec![], vec![]),
+    };
+    for t in &clip.tracks {
+        if !n.contains(&t.joint) {
+            n.push(t.joint.clone());
+            p.push(None);
+            b.push(Transform::IDENTITY);
+        }
+    }
+    (n, p, b)
+}
+
+fn models(parents: &[Option<usize>], local: &[Transform]) -> Vec<Mat4> {
+    let mut out: Vec<Mat4> = Vec::new();
+    for (j, t) in local.iter().enumerate() {
+        let m = Mat4::from_scale_rotation_translation(t.scale, t.rotation, t.translation);
+        out.push(match parents[j] {
+            Some(p) => out[p] * m,
+            None => m,
+        });
+    }
+    out
+}
+
+/// Largest error of `decoded` against the source curves of `src`, at every key time of `keys`.
+fn max_error(
+    skeleton: Option<&Skeleton>,
+    src: &SceneClip,
+    keys: &[f32],
+    decoded: &Clip,
+    distance: f32,
+) -> f32 {
+    let (names, parents, bind) = rig(skeleton, src);
+    let bind_models = models(&parents, &bind);
+    let offsets: Vec<[Vec3; 3]> = bind_models
+        .iter()
+        .map(|m| {
+            let s = m
+                .x_axis
+                .truncate()
+                .length()
+                .max(m.y_axis.truncate().length())
+                .max(m.z_axis.truncate().length());
+            [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * (distance / s))
+        })
+        .collect();
+    let names_owned = names.clone();
+    let sk = Skeleton::new(
+        names_owned,
+        parents.iter().map(|p| p.map(|p| p as u16)).collect(),
+        bind.clone(),
+        vec![Mat4::IDENTITY; names.len()],
+    )
+    .unwrap();
+    let binding = ClipBinding::new(decoded, &sk);
+    let mut sampler = Sampler::new();
+    let defaults = if src.additive {
+        vec![Transform::IDENTITY; bind.len()]
+    } else {
+        bind.clone()
+    };
+    let mut worst = 0.0f32;
+    for &t in keys {
+        let mut source = defaults.clone();
+        for tr in &src.tracks {
+            let j = names.iter().position(|n| *n == tr.joint).unwrap();
+            if let Some(v) = at(&tr.translation, t, |a, b, x| a.lerp(b, x)) {
+                source[j].translation = v;
+            }
+            if let Some(q) = at(&tr.rotation, t, slerpish) {
+                source[j].rotation = q.normalize();
+            }
+            if let Some(v) = at(&tr.scale, t, |a, b, x| a.lerp(b, x)) {
+                source[j].scale = v;
+            }
+        }
+        let mut pose = defaults.clone();
+        sampler
+            .sample(decoded, &binding, &sk, t, &mut pose)
+            .unwrap();
+        let (a, b) = (models(&parents, &source), models(&parents, &pose));
+        for j in 0..a.len() {
+            for o in offsets[j] {
+                worst = worst.max(a[j].transform_point3(o).distance(b[j].transform_point3(o)));
+            }
+        }
+    }
+    worst
+}
+
+fn animated_scenes() -> Vec<(String, Scene)> {
+    let Some(root) = sinew_testdata::corpus() else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for dir in ["gltf", "gltf/magnum", "ms3d", "bvh"] {
+        let mut files: Vec<_> = std::fs::read_dir(root.join(dir))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.is_file())
+            .collect();
+        files.sort();
+        for path in files {
+            match sinew_import::import_path(&path, &Default::default()) {
+                Ok(scene) if !scene.clips.is_empty() => {
+                    out.push((path.display().to_string(), scene));
+                }
+                Ok(_) => {}
+                Err(e) => eprintln!("skipping {}: {e}", path.display()),
+            }
+        }
+    }
+    out
+}
+
+fn check_all(options: &CompressOptions) -> usize {
+    let mut checked = 0;
+    for (file, scene) in animated_scenes() {
+        let plain = compile(&scene).unwrap();
+        let skeleton = plain.skeleton.clone();
+        let mut compressed = Vec::new();
+        let mut reports = Vec::new();
+        for clip in &plain.clips {
+            let (c, r) = compress_clip(clip, skeleton.as_ref(), options);
+            compressed.push(c);
+            reports.push(r);
+        }
+        let asset = Asset {
+            clips: compressed,
+            ..plain.clone()
+        };
+        let back = format::read(&format::write(&asset).unwrap()).unwrap();
+        assert_eq!(back.clips, asset.clips, "{file}");
+        for (i, src) in scene.clips.iter().enumerate() {
+            let r = &reports[i];
+            let decoded = &back.clips[i];
+            let err = max_error(
+                skeleton.as_ref(),
+                src,
+                plain.clips[i].times(),
+                decoded,
+                r.error_distance,
+            );
+            let slack = r.tolerance * 1e-3 + 1e-6;
+            assert!(
+                err <= r.tolerance + slack,
+                "{file} clip {:?}: error {err} > tolerance {} (report {r:?})",
+                src.name,
+                r.tolerance
+            );
+            if r.animated_joints > 0 {
+                assert!(decoded.is_compressed(), "{file} {:?}: {r:?}", src.name);
+                assert!(
+                    clip_record_size(decoded) < clip_record_size(&plain.clips[i]),
+                    "{file} {:?}: {r:?}",
+                    src.name
+                );
+                assert_eq!(r.compressed_bytes, clip_record_size(decoded));
+                checked += 1;
+            }
+        }
+    }
+    checked
+}
+
+#[test]
+fn every_corpus_clip_is_within_the_peers_tolerance_and_smaller() {
+    let n = check_all(&CompressOptions::peers());
+    if sinew_testdata::corpus().is_some() {
+        // CesiumMan 1, Fox 3, RiggedFigure 1, RiggedSimple 1, SimpleSkin 1, magnum 2 (glTF alone).
+        assert!(n >= 9, "only {n} animated clips checked");
+    }
+}
+
+#[test]
+fn every_corpus_clip_is_within_the_default_tolerance_and_smaller() {
+    let n = check_all(&CompressOptions::default());
+    if sinew_testdata::corpus().is_some() {
+        assert!(n >= 9, "only {n} animated clips checked");
+    }
+}

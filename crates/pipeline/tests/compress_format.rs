@@ -1,0 +1,213 @@
+//! Compressed clips in `.sinew` files: round trip, and a reader that rejects malformed compressed
+//! payloads (bit widths above 24, non-finite ranges, data past the end) without panicking.
+
+#![allow(clippy::unwrap_used)]
+
+use sinew_core::format::{self, Asset, FormatErrorKind, Tag};
+use sinew_core::glam::{Quat, Vec3};
+use sinew_core::{Clip, ClipBinding, Curve, JointDesc, Sampler, Skeleton, TrackCurves, Transform};
+use sinew_pipeline::compress::{compress_clip, CompressOptions};
+
+fn skeleton() -> Skeleton {
+    let joint = |name: &str, parent: Option<&str>, y: f32| JointDesc {
+        name: name.into(),
+        parent: parent.map(Into::into),
+        bind_local: Transform::from_translation(Vec3::Y * y),
+        inverse_bind: None,
+    };
+    Skeleton::from_unordered(vec![
+        joint("root", None, 1.0),
+        joint("spine", Some("root"), 0.5),
+        joint("head", Some("spine"), 0.5),
+    ])
+    .unwrap()
+    .0
+}
+
+fn clip() -> Clip {
+    let times: Vec<f32> = (0..40).map(|k| k as f32 / 20.0).collect();
+    let wave = |f: f32| -> Vec<Quat> {
+        times
+            .iter()
+            .map(|t| Quat::from_rotation_z((t * f).sin()))
+            .collect()
+    };
+    Clip::from_curves(
+        "sway",
+        times[39],
+        20.0,
+        false,
+        false,
+        vec![
+            TrackCurves {
+                joint: "root".into(),
+                translation: Curve::new(
+                    times.clone(),
+                    times.iter().map(|t| Vec3::new(*t, 1.0, 0.0)).collect(),
+                ),
+                rotation: Curve::new(times.clone(), wave(3.0)),
+                ..Default::default()
+            },
+            TrackCurves {
+                joint: "spine".into(),
+                rotation: Curve::new(times.clone(), wave(5.0)),
+                scale: Curve::new(
+                    times.clone(),
+                    times.iter().map(|t| Vec3::splat(1.0 + t * 0.1)).collect(),
+                ),
+                ..Default::default()
+            },
+        ],
+    )
+    .unwrap()
+}
+
+fn compressed_file() -> (Vec<u8>, Clip) {
+    let (c, r) = compress_clip(&clip(), Some(&skeleton()), &CompressOptions::default());
+    assert!(c.is_compressed(), "{r:?}");
+    let asset = Asset {
+        clips: vec![c.clone()],
+        ..Default::default()
+    };
+    (format::write(&asset).unwrap(), c)
+}
+
+/// Recomputes the CLIP section's CRC and the header CRC after editing bytes.
+fn fix_crcs(bytes: &mut [u8]) {
+    let count = u32::from_le_bytes(bytes[32..36].try_into().unwrap()) as usize;
+    for i in 0..count {
+        let e = 48 + i * 32;
+        let off = u64::from_le_bytes(bytes[e + 8..e + 16].try_into().unwrap()) as usize;
+        let size = u64::from_le_bytes(bytes[e + 16..e + 24].try_into().unwrap()) as usize;
+        let crc = crc32fast::hash(&bytes[off..off + size]);
+        bytes[e + 24..e + 28].copy_from_slice(&crc.to_le_bytes());
+    }
+    let mut h = crc32fast::Hasher::new();
+    h.update(&bytes[..44]);
+    h.update(&bytes[48..48 + count * 32]);
+    let crc = h.finalize();
+    bytes[44..48].copy_from_slice(&crc.to_le_bytes());
+}
+
+fn clip_record_offset(bytes: &[u8]) -> usize {
+    let s = format::sections(bytes).unwrap();
+    s.iter().find(|s| s.tag == Tag::CLIPS).unwrap().offset as usize + 16
+}
+
+/// Offset of the segment entries inside the clip record, from the documented layout.
+fn segments_offset(c: &Clip) -> usize {
+    let pad = |n: usize| n.div_ceil(16) * 16;
+    let parts = c.quantized_parts().unwrap();
+    let constants: usize = c
+        .tracks()
+        .iter()
+        .map(|t| {
+            use sinew_core::Channel::Constant;
+            [
+                matches!(t.translation, Constant(_)) as usize * 3,
+                matches!(t.rotation, Constant(_)) as usize * 4,
+                matches!(t.scale, Constant(_)) as usize * 3,
+            ]
+            .iter()
+            .sum::<usize>()
+        })
+        .sum();
+    let mut at = pad(32 + 4 * c.times().len());
+    at = pad(at + 8 * c.tracks().len());
+    at = pad(at + 4 * constants);
+    pad(at + 8 * parts.ranges.len())
+}
+
+#[test]
+fn compressed_clip_round_trips_and_header_says_1_1() {
+    let (bytes, c) = compressed_file();
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 1);
+    let back = format::read(&bytes).unwrap();
+    assert_eq!(back.clips[0], c);
+    let rec = clip_record_offset(&bytes);
+    // Flags: bit 2 (compressed) set.
+    assert_eq!(
+        u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap()),
+        4
+    );
+    // The segment entries sit where docs/format.md says: the first one's bit width is its first byte.
+    let parts = c.quantized_parts().unwrap();
+    assert_eq!(bytes[rec + segments_offset(&c)], parts.segments[0].bits);
+}
+
+#[test]
+fn reader_rejects_bit_widths_above_24() {
+    let (mut bytes, c) = compressed_file();
+    let at = clip_record_offset(&bytes) + segments_offset(&c);
+    bytes[at] = 33;
+    fix_crcs(&mut bytes);
+    let e = format::read(&bytes).unwrap_err();
+    // Either the data length no longer matches or the width is refused: never a panic or a clip.
+    assert_eq!(e.section, "CLIP");
+    assert!(
+        matches!(
+            e.kind,
+            FormatErrorKind::Invalid(_) | FormatErrorKind::CountTooLarge { .. }
+        ),
+        "{e}"
+    );
+}
+
+#[test]
+fn reader_rejects_non_finite_ranges() {
+    let (mut bytes, c) = compressed_file();
+    let at = clip_record_offset(&bytes) + segments_offset(&c)
+        - 16 * c.quantized_parts().unwrap().ranges.len().div_ceil(2);
+    bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+    fix_crcs(&mut bytes);
+    let e = format::read(&bytes).unwrap_err();
+    assert!(e.to_string().contains("range"), "{e}");
+}
+
+#[test]
+fn reader_rejects_data_past_the_end() {
+    let (mut bytes, _) = compressed_file();
+    // Claim more keys than the record holds: key times, segments and data all run past the section.
+    let rec = clip_record_offset(&bytes);
+    bytes[rec + 16..rec + 20].copy_from_slice(&100_000u32.to_le_bytes());
+    fix_crcs(&mut bytes);
+    let e = format::read(&bytes).unwrap_err();
+    assert!(
+        matches!(e.kind, FormatErrorKind::CountTooLarge { .. }),
+        "{e}"
+    );
+}
+
+#[test]
+fn every_single_byte_corruption_of_the_clip_section_is_an_error_or_a_usable_clip() {
+    let (bytes, _) = compressed_file();
+    let s = format::sections(&bytes).unwrap();
+    let clip = s.iter().find(|s| s.tag == Tag::CLIPS).unwrap();
+    let sk = skeleton();
+    let mut accepted = 0;
+    for at in clip.offset as usize..(clip.offset + clip.size) as usize {
+        for x in [0x01u8, 0x80, 0xFF] {
+            let mut b = bytes.clone();
+            b[at] ^= x;
+            fix_crcs(&mut b);
+            if let Ok(asset) = format::read(&b) {
+                accepted += 1;
+                for c in &asset.clips {
+                    let binding = ClipBinding::new(c, &sk);
+                    let mut out = vec![Transform::IDENTITY; sk.len()];
+                    for t in [-1.0, 0.0, 0.37, 1.0, 5.0] {
+                        Sampler::new()
+                            .sample(c, &binding, &sk, t, &mut out)
+                            .unwrap();
+                    }
+                    let _ = c.to_plain();
+                }
+            }
+        }
+    }
+    // Flipping quantized data bits gives another valid clip: some corruptions must be accepted.
+    assert!(accepted > 0);
+    for len in 0..bytes.len() {
+        assert!(format::read(&bytes[..len]).is_err());
+    }
+}

@@ -97,7 +97,7 @@ fn full_asset_round_trips_and_header_bytes_are_as_documented() {
     let bytes = format::write(&asset).unwrap();
     assert_eq!(&bytes[0..8], b"\x89SNW\r\n\x1a\n");
     assert_eq!(u16_at(&bytes, 8), 1);
-    assert_eq!(u16_at(&bytes, 10), 0);
+    assert_eq!(u16_at(&bytes, 10), 1);
     assert_eq!(u32_at(&bytes, 12), 0);
     assert_eq!(u64_at(&bytes, 16), bytes.len() as u64);
     assert_eq!(u64_at(&bytes, 24), 48);

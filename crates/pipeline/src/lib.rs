@@ -2,9 +2,11 @@
 //! LOD generation, keyframe reduction and quantization, compiling a Scene into the `.sinew` runtime
 //! format, baking vertex caches and verifying them against the runtime.
 
+pub mod bake;
 pub mod cache;
 pub mod compile;
 pub mod lod;
 pub mod mapping;
 pub mod retarget;
 pub mod split;
+pub mod verify;

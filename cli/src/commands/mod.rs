@@ -1,7 +1,9 @@
 //! One module per subcommand; [`run`] dispatches.
 
+pub mod bake;
 pub mod completions;
 pub mod inspect;
+pub mod verify;
 
 use crate::cli::Command;
 use crate::output::Ctx;
@@ -12,5 +14,7 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
     match command {
         Command::Inspect(args) => inspect::run(&args, ctx),
         Command::Completions(args) => completions::run(&args),
+        Command::Bake(args) => bake::run(&args, ctx),
+        Command::Verify(args) => verify::run(&args, ctx),
     }
 }

@@ -24,7 +24,9 @@ pub mod transform;
 pub use animator::{Animator, AnimatorError, ClipId};
 pub use blend::{apply_additive, BlendBuffers, BlendError, Layer};
 pub use clip::{Channel, Clip, ClipBinding, ClipError, Curve, Sampler, Track, TrackCurves};
-pub use mesh::{Lod, Mesh, Submesh, MAX_INFLUENCES};
+pub use mesh::{
+    projected_pixels, select_lod, Lod, Mesh, Submesh, DEFAULT_PIXEL_ERROR, MAX_INFLUENCES,
+};
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
 pub use skinning::{local_to_model, skin, skin_lod, skinning_palette, SkinError};
 pub use transform::Transform;

@@ -5,8 +5,11 @@
 pub mod bake;
 pub mod cache;
 pub mod compile;
+pub mod cut;
 pub mod lod;
 pub mod mapping;
 pub mod retarget;
 pub mod split;
 pub mod verify;
+
+pub use cut::{cut_clips, CutError};

@@ -48,6 +48,31 @@ impl Default for LodOptions {
 /// about this much; the error actually reached is always reported.
 pub const DEFAULT_MAX_ERROR: f32 = 0.05;
 
+/// The simplifier's quality knobs. The defaults are the measured best (docs/lod.md); the other values
+/// exist so that `examples/lod_compare.rs --sweep` can show why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodTuning {
+    /// Weight of each normal component in the collapse cost.
+    pub normal_weight: f32,
+    /// Weight of each UV component.
+    pub uv_weight: f32,
+    /// Weight of each component of the displacement under the two test poses (0: not skin-aware).
+    pub pose_weight: f32,
+    /// meshoptimizer's `RegularizeLight` option.
+    pub regularize: bool,
+}
+
+impl Default for LodTuning {
+    fn default() -> Self {
+        Self {
+            normal_weight: NORMAL_WEIGHT,
+            uv_weight: UV_WEIGHT,
+            pose_weight: POSE_WEIGHT,
+            regularize: true,
+        }
+    }
+}
+
 /// Why LODs could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LodError {
@@ -265,6 +290,135 @@ fn border_locks(lod: &Lod) -> Vec<SimplifyVertex> {
         .collect()
 }
 
+/// True for a flat-shaded triangle soup: every vertex is used by exactly one triangle and the three
+/// corners of every triangle share one normal (a non-indexed source such as Fox.glb, whose importer
+/// generated per-face normals). meshoptimizer sees every corner of such a mesh as an attribute seam
+/// and cannot collapse anything, so the soup is welded without normals and rebuilt flat afterwards.
+fn is_flat_soup(lod: &Lod) -> bool {
+    if lod.indices.is_empty() || lod.indices.len() != lod.positions.len() {
+        return false;
+    }
+    let mut uses = vec![0u8; lod.positions.len()];
+    for &i in &lod.indices {
+        let u = &mut uses[i as usize];
+        if *u > 0 {
+            return false;
+        }
+        *u = 1;
+    }
+    lod.indices.chunks_exact(3).all(|t| {
+        let n = lod.normals[t[0] as usize];
+        lod.normals[t[1] as usize] == n && lod.normals[t[2] as usize] == n
+    })
+}
+
+/// Merges vertices that are bit-for-bit equal in position, UV, joints and weights (and normal, unless
+/// `ignore_normals`), with meshoptimizer's `generateVertexRemap`. Lossless when normals count; with
+/// `ignore_normals` the merged vertices get area-weighted normals of the welded surface (used only as
+/// a simplification attribute; [`flat_soup`] rebuilds face normals afterwards). `lod` must be valid.
+fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
+    const KEY: usize = 16;
+    let n = lod.positions.len();
+    let mut keys = vec![[0u32; KEY]; n];
+    for (v, k) in keys.iter_mut().enumerate() {
+        let p = lod.positions[v];
+        k[0..3].copy_from_slice(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]);
+        if !ignore_normals {
+            let q = lod.normals[v];
+            k[3..6].copy_from_slice(&[q.x.to_bits(), q.y.to_bits(), q.z.to_bits()]);
+        }
+        if let Some(uv) = lod.uvs.get(v) {
+            k[6..8].copy_from_slice(&[uv.x.to_bits(), uv.y.to_bits()]);
+        }
+        if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {
+            k[8] = j[0] as u32 | (j[1] as u32) << 16;
+            k[9] = j[2] as u32 | (j[3] as u32) << 16;
+            for (slot, x) in w.iter().enumerate() {
+                k[10 + slot] = x.to_bits();
+            }
+        }
+    }
+    // Indices were validated against `n` (validate_lod), as generateVertexRemap requires.
+    let (unique, remap) = meshopt::generate_vertex_remap(&keys, Some(&lod.indices));
+    let mut first = vec![u32::MAX; unique];
+    for (v, &r) in remap.iter().enumerate() {
+        if let Some(f) = first.get_mut(r as usize) {
+            if *f == u32::MAX {
+                *f = v as u32;
+            }
+        }
+    }
+    let pick = |f: &u32| *f as usize;
+    let indices: Vec<u32> = lod.indices.iter().map(|&i| remap[i as usize]).collect();
+    let positions: Vec<glam::Vec3> = first.iter().map(|f| lod.positions[pick(f)]).collect();
+    let normals = if ignore_normals {
+        let mut acc = vec![glam::Vec3::ZERO; unique];
+        for t in indices.chunks_exact(3) {
+            let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
+            let f = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+            acc[a] += f;
+            acc[b] += f;
+            acc[c] += f;
+        }
+        acc.iter()
+            .zip(&first)
+            .map(|(v, f)| v.try_normalize().unwrap_or(lod.normals[pick(f)]))
+            .collect()
+    } else {
+        first.iter().map(|f| lod.normals[pick(f)]).collect()
+    };
+    Lod {
+        positions,
+        normals,
+        uvs: if lod.uvs.is_empty() {
+            Vec::new()
+        } else {
+            first.iter().map(|f| lod.uvs[pick(f)]).collect()
+        },
+        joints: if lod.joints.is_empty() {
+            Vec::new()
+        } else {
+            first.iter().map(|f| lod.joints[pick(f)]).collect()
+        },
+        weights: if lod.weights.is_empty() {
+            Vec::new()
+        } else {
+            first.iter().map(|f| lod.weights[pick(f)]).collect()
+        },
+        indices,
+        submeshes: lod.submeshes.clone(),
+        error: lod.error,
+    }
+}
+
+/// Rebuilds a flat-shaded soup from a simplified welded mesh: three own vertices per triangle, each
+/// with the triangle's face normal (the corner's smooth normal if the triangle has no area).
+fn flat_soup(lod: &Lod) -> Lod {
+    let mut out = Lod {
+        submeshes: lod.submeshes.clone(),
+        error: lod.error,
+        ..Lod::default()
+    };
+    for t in lod.indices.chunks_exact(3) {
+        let c = [t[0] as usize, t[1] as usize, t[2] as usize];
+        let p = c.map(|v| lod.positions[v]);
+        let face = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize();
+        for &v in &c {
+            out.indices.push(out.positions.len() as u32);
+            out.positions.push(lod.positions[v]);
+            out.normals.push(face.unwrap_or(lod.normals[v]));
+            if let Some(uv) = lod.uvs.get(v) {
+                out.uvs.push(*uv);
+            }
+            if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {
+                out.joints.push(*j);
+                out.weights.push(*w);
+            }
+        }
+    }
+    out
+}
+
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
 /// Returns the new LOD (compacted and optimised) and the relative error of this step.
 fn simplify_step(
@@ -272,17 +426,23 @@ fn simplify_step(
     skeleton: Option<&Skeleton>,
     target_triangles: usize,
     max_error: f32,
+    tuning: &LodTuning,
 ) -> (Lod, f32) {
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     let attrs = attributes(source, skeleton);
     let mut weights = [0.0f32; ATTRIBUTE_COUNT];
-    weights[0..3].fill(NORMAL_WEIGHT);
+    weights[0..3].fill(tuning.normal_weight);
     if !source.uvs.is_empty() {
-        weights[3..5].fill(UV_WEIGHT);
+        weights[3..5].fill(tuning.uv_weight);
     }
     if source.is_skinned() && skeleton.is_some() {
-        weights[5..].fill(POSE_WEIGHT);
+        weights[5..].fill(tuning.pose_weight);
     }
+    let flags = if tuning.regularize {
+        SimplifyOptions::RegularizeLight
+    } else {
+        SimplifyOptions::None
+    };
     let locks = border_locks(source);
     let total = source.triangle_count().max(1);
     let mut indices = Vec::with_capacity(source.indices.len());
@@ -318,7 +478,7 @@ fn simplify_step(
                 &locks,
                 target * 3,
                 max_error,
-                SimplifyOptions::RegularizeLight,
+                flags,
                 Some(&mut err),
             )
         };
@@ -501,6 +661,16 @@ pub fn build_lods(
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
 ) -> Result<Vec<GeneratedLod>, LodError> {
+    build_lods_tuned(mesh, skeleton, options, &LodTuning::default())
+}
+
+/// [`build_lods`] with explicit quality knobs.
+pub fn build_lods_tuned(
+    mesh: &Mesh,
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+) -> Result<Vec<GeneratedLod>, LodError> {
     options.validate()?;
     validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
         mesh: mesh.name.clone(),
@@ -538,7 +708,14 @@ pub fn build_lods(
     for (k, &ratio) in options.ratios.iter().enumerate() {
         let target = ((base_tris as f64) * ratio as f64).round() as usize;
         let budget = (options.max_error - accumulated).max(0.0);
-        let (mut lod, step_error) = simplify_step(&previous, skeleton, target, budget);
+        let flat = is_flat_soup(&previous);
+        let welded = weld(&previous, flat);
+        validate_lod(&welded).map_err(|problem| LodError::BadMesh {
+            mesh: mesh.name.clone(),
+            problem: format!("after welding: {problem}"),
+        })?;
+        let (lod, step_error) = simplify_step(&welded, skeleton, target, budget, tuning);
+        let mut lod = if flat { flat_soup(&lod) } else { lod };
         accumulated += step_error;
         if k + 1 == options.ratios.len() && options.lowest_lod_influences < MAX_INFLUENCES {
             limit_influences(&mut lod, options.lowest_lod_influences);
@@ -582,12 +759,21 @@ pub fn generate_lods(
     scene: &mut Scene,
     options: &LodOptions,
 ) -> Result<Vec<MeshLodReport>, LodError> {
+    generate_lods_tuned(scene, options, &LodTuning::default())
+}
+
+/// [`generate_lods`] with explicit quality knobs.
+pub fn generate_lods_tuned(
+    scene: &mut Scene,
+    options: &LodOptions,
+    tuning: &LodTuning,
+) -> Result<Vec<MeshLodReport>, LodError> {
     options.validate()?;
     let skeleton = scene.skeleton.clone();
     let mut reports = Vec::with_capacity(scene.meshes.len());
     for mesh in &mut scene.meshes {
         optimize_base(mesh)?;
-        mesh.lods = build_lods(mesh, skeleton.as_ref(), options)?;
+        mesh.lods = build_lods_tuned(mesh, skeleton.as_ref(), options, tuning)?;
         reports.push(MeshLodReport {
             mesh: mesh.name.clone(),
             base_triangles: mesh.geometry.triangle_count(),

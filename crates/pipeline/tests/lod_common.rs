@@ -69,8 +69,138 @@ pub fn surface_samples(positions: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
     out
 }
 
+/// Triangles bucketed in a uniform grid (by bounding box) for nearest-surface queries.
+pub struct TriangleGrid {
+    tris: Vec<[Vec3; 3]>,
+    lo: Vec3,
+    cell: f32,
+    dims: [i32; 3],
+    cells: Vec<Vec<u32>>,
+}
+
+impl TriangleGrid {
+    /// Builds a grid of about two triangles per cell over the triangles' bounding box.
+    pub fn new(positions: &[Vec3], indices: &[u32]) -> Self {
+        let tris: Vec<[Vec3; 3]> = indices
+            .chunks_exact(3)
+            .map(|t| {
+                [
+                    positions[t[0] as usize],
+                    positions[t[1] as usize],
+                    positions[t[2] as usize],
+                ]
+            })
+            .collect();
+        let mut lo = Vec3::splat(f32::MAX);
+        let mut hi = Vec3::splat(f32::MIN);
+        for t in &tris {
+            for p in t {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let volume = size.x * size.y * size.z;
+        let cell = (volume / (tris.len().max(1) as f32 / 2.0))
+            .cbrt()
+            .max(size.max_element() / 128.0);
+        let dims = [
+            ((size.x / cell) as i32 + 1).min(256),
+            ((size.y / cell) as i32 + 1).min(256),
+            ((size.z / cell) as i32 + 1).min(256),
+        ];
+        let mut cells = vec![Vec::new(); (dims[0] * dims[1] * dims[2]) as usize];
+        let mut g = TriangleGrid {
+            tris: Vec::new(),
+            lo,
+            cell,
+            dims,
+            cells: Vec::new(),
+        };
+        for (i, t) in tris.iter().enumerate() {
+            let a = g.coord(t[0].min(t[1]).min(t[2]));
+            let b = g.coord(t[0].max(t[1]).max(t[2]));
+            for z in a[2]..=b[2] {
+                for y in a[1]..=b[1] {
+                    for x in a[0]..=b[0] {
+                        cells[g.flat([x, y, z])].push(i as u32);
+                    }
+                }
+            }
+        }
+        g.tris = tris;
+        g.cells = cells;
+        g
+    }
+
+    fn coord(&self, p: Vec3) -> [i32; 3] {
+        let c = (p - self.lo) / self.cell;
+        [
+            (c.x as i32).clamp(0, self.dims[0] - 1),
+            (c.y as i32).clamp(0, self.dims[1] - 1),
+            (c.z as i32).clamp(0, self.dims[2] - 1),
+        ]
+    }
+
+    fn flat(&self, c: [i32; 3]) -> usize {
+        ((c[2] * self.dims[1] + c[1]) * self.dims[0] + c[0]) as usize
+    }
+
+    /// Distance from `p` to the nearest triangle: cells are searched in growing shells around the
+    /// point's cell until no unsearched cell can hold anything closer.
+    pub fn distance(&self, p: Vec3) -> f32 {
+        if self.tris.is_empty() {
+            return f32::MAX;
+        }
+        // Distance from p to the grid's box: shells must reach past it.
+        let hi = self.lo
+            + Vec3::new(
+                self.dims[0] as f32,
+                self.dims[1] as f32,
+                self.dims[2] as f32,
+            ) * self.cell;
+        let outside = (self.lo - p).max(p - hi).max(Vec3::ZERO).length();
+        let c = self.coord(p);
+        let max_r = self.dims.iter().copied().max().unwrap_or(1);
+        let mut best = f32::MAX;
+        for r in 0..=max_r {
+            for z in (c[2] - r).max(0)..=(c[2] + r).min(self.dims[2] - 1) {
+                for y in (c[1] - r).max(0)..=(c[1] + r).min(self.dims[1] - 1) {
+                    for x in (c[0] - r).max(0)..=(c[0] + r).min(self.dims[0] - 1) {
+                        let on_shell =
+                            (x - c[0]).abs() == r || (y - c[1]).abs() == r || (z - c[2]).abs() == r;
+                        if !on_shell {
+                            continue;
+                        }
+                        for &t in &self.cells[self.flat([x, y, z])] {
+                            let t = &self.tris[t as usize];
+                            best = best.min(point_triangle_distance(p, t[0], t[1], t[2]));
+                        }
+                    }
+                }
+            }
+            // Every cell not yet searched is at least r cells from p's cell (p's projection onto the
+            // grid's box lies in that cell; p is `outside` further, at a right or obtuse angle).
+            let reach = r as f32 * self.cell;
+            if best <= (outside * outside + reach * reach).sqrt() {
+                break;
+            }
+        }
+        best
+    }
+}
+
 /// Largest distance from any sample of `from` to the surface of `to`.
 pub fn one_sided(from: &[Vec3], from_idx: &[u32], to: &[Vec3], to_idx: &[u32]) -> f32 {
+    let grid = TriangleGrid::new(to, to_idx);
+    surface_samples(from, from_idx)
+        .iter()
+        .map(|&p| grid.distance(p))
+        .fold(0.0, f32::max)
+}
+
+/// The same as [`one_sided`] by brute force over every triangle (to check the grid).
+pub fn one_sided_brute(from: &[Vec3], from_idx: &[u32], to: &[Vec3], to_idx: &[u32]) -> f32 {
     let tris: Vec<[Vec3; 3]> = to_idx
         .chunks_exact(3)
         .map(|t| [to[t[0] as usize], to[t[1] as usize], to[t[2] as usize]])

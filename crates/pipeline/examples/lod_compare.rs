@@ -1,0 +1,312 @@
+//! Compares sinew's LODs with other simplified versions of the same file (gltfpack's, from
+//! tools/lod-compare.sh): triangles reached, Hausdorff distance to the original, the same distance
+//! with both posed mid-animation, and time.
+//!
+//! `cargo run --release -p sinew-pipeline --example lod_compare -- ORIGINAL [OTHER...]`
+//!
+//! Every file is read with sinew_import; the distance is the symmetric sampled Hausdorff distance of
+//! the test helpers (tests/lod_common.rs), over all meshes of a file as one triangle soup, reported in
+//! percent of the original's bounding-box diagonal. Sinew's LODs are built twice: at the nominal
+//! targets (0.5, 0.25) and at the ratios the other files reached, so that rows compare equal
+//! triangle counts.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+#[path = "../tests/lod_common.rs"]
+mod lod_common;
+
+use lod_common::{diagonal, hausdorff};
+use sinew_core::glam::{Mat4, Vec3};
+use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
+use sinew_import::{import_path, ImportOptions};
+use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning, DEFAULT_MAX_ERROR};
+use sinew_scene::Scene;
+use std::path::Path;
+use std::time::Instant;
+
+/// All meshes of a LOD level (None: LOD 0) as one soup, optionally posed by `palette`.
+fn soup(scene: &Scene, level: Option<usize>, palette: Option<&[Mat4]>) -> (Vec<Vec3>, Vec<u32>) {
+    let (mut p, mut i) = (Vec::new(), Vec::new());
+    for m in &scene.meshes {
+        let lod: &Lod = match level {
+            None => &m.geometry,
+            Some(k) => &m.lods[k].lod,
+        };
+        let base = p.len() as u32;
+        match palette {
+            Some(pal) if lod.is_skinned() => {
+                let mut out = vec![Vec3::ZERO; lod.positions.len()];
+                sinew_core::skin(
+                    pal,
+                    &lod.positions,
+                    &[],
+                    &lod.joints,
+                    &lod.weights,
+                    &mut out,
+                    &mut [],
+                )
+                .expect("skinning");
+                p.extend(out);
+            }
+            _ => p.extend_from_slice(&lod.positions),
+        }
+        i.extend(lod.indices.iter().map(|&x| x + base));
+    }
+    (p, i)
+}
+
+/// The skinning palette of the scene's first clip sampled at half its duration.
+fn mid_pose(scene: &Scene) -> Option<(Vec<Mat4>, String, f32)> {
+    let skeleton: &Skeleton = scene.skeleton.as_ref()?;
+    let c = scene.clips.first()?;
+    let clip = Clip::from_curves(
+        c.name.clone(),
+        c.duration,
+        c.sample_rate,
+        c.looping,
+        c.additive,
+        c.tracks.clone(),
+    )
+    .ok()?;
+    let binding = ClipBinding::new(&clip, skeleton);
+    let mut locals = skeleton.bind_local().to_vec();
+    let t = clip.duration() * 0.5;
+    Sampler::new()
+        .sample(&clip, &binding, skeleton, t, &mut locals)
+        .ok()?;
+    let mut models = vec![Mat4::IDENTITY; skeleton.len()];
+    sinew_core::local_to_model(skeleton.parents(), &locals, &mut models).ok()?;
+    let mut palette = vec![Mat4::IDENTITY; skeleton.len()];
+    sinew_core::skinning_palette(&models, skeleton.inverse_bind(), &mut palette).ok()?;
+    Some((palette, c.name.clone(), t))
+}
+
+fn triangles(scene: &Scene, level: Option<usize>) -> usize {
+    scene
+        .meshes
+        .iter()
+        .map(|m| match level {
+            None => m.geometry.triangle_count(),
+            Some(k) => m.lods[k].lod.triangle_count(),
+        })
+        .sum()
+}
+
+struct Row {
+    tool: String,
+    triangles: usize,
+    hausdorff: f32,
+    posed: Option<f32>,
+    seconds: f64,
+}
+
+fn print_rows(rows: &[Row], base_tris: usize) {
+    println!(
+        "| tool | triangles | ratio | Hausdorff (% diag) | posed Hausdorff (% diag) | time (ms) |"
+    );
+    println!("|---|---|---|---|---|---|");
+    for r in rows {
+        println!(
+            "| {} | {} | {:.3} | {:.3} | {} | {:.1} |",
+            r.tool,
+            r.triangles,
+            r.triangles as f64 / base_tris as f64,
+            r.hausdorff,
+            r.posed.map_or("-".into(), |h| format!("{h:.3}")),
+            r.seconds * 1e3
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some((original, others)) = args.split_first() else {
+        eprintln!("usage: lod_compare ORIGINAL [OTHER...]");
+        std::process::exit(2);
+    };
+    let options = ImportOptions::default();
+    let scene = import_path(Path::new(original), &options).expect("import original");
+    let (base_p, base_i) = soup(&scene, None, None);
+    let diag = diagonal(&base_p);
+    let base_tris = base_i.len() / 3;
+    let pose = mid_pose(&scene);
+    let posed_base = pose
+        .as_ref()
+        .map(|(pal, _, _)| soup(&scene, None, Some(pal)));
+    println!(
+        "{original}: {} meshes, {} vertices, {base_tris} triangles, diagonal {diag:.4}",
+        scene.meshes.len(),
+        base_p.len()
+    );
+    if let Some((_, name, t)) = &pose {
+        println!("posed: clip {name:?} at t = {t:.3} s");
+    }
+    let pct = |h: f32| h / diag * 100.0;
+    let measure = |s: &Scene, level: Option<usize>, pal: Option<&[Mat4]>| -> (f32, Option<f32>) {
+        let (p, i) = soup(s, level, None);
+        let h = pct(hausdorff(&base_p, &base_i, &p, &i));
+        let posed = match (pal, &posed_base) {
+            (Some(pal), Some((bp, bi))) => {
+                let (p, i) = soup(s, level, Some(pal));
+                Some(pct(hausdorff(bp, bi, &p, &i)))
+            }
+            _ => None,
+        };
+        (h, posed)
+    };
+    let sinew_tuned = |ratios: Vec<f32>,
+                       label: &str,
+                       tuning: LodTuning,
+                       max_error: f32|
+     -> Vec<Row> {
+        let mut s = scene.clone();
+        let lod_options = LodOptions {
+            ratios,
+            max_error,
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let reports = generate_lods_tuned(&mut s, &lod_options, &tuning).expect("LODs");
+        let seconds = start.elapsed().as_secs_f64();
+        for r in &reports {
+            for g in &r.lods {
+                println!(
+                    "  {label} {}: target {:.3} reached {:.3} error {:.4} (model {:.4}) stopped_by_error_limit {}",
+                    r.mesh, g.target_ratio, g.reached_ratio, g.error_relative, g.error_model,
+                    g.stopped_by_error_limit
+                );
+            }
+        }
+        let pal = pose.as_ref().map(|(p, _, _)| p.as_slice());
+        (0..lod_options.ratios.len())
+            .map(|k| {
+                let (h, posed) = measure(&s, Some(k), pal);
+                Row {
+                    tool: format!("sinew {label} LOD{}", k + 1),
+                    triangles: triangles(&s, Some(k)),
+                    hausdorff: h,
+                    posed,
+                    seconds,
+                }
+            })
+            .collect()
+    };
+    let sinew_rows = |ratios: Vec<f32>, label: &str| {
+        sinew_tuned(ratios, label, LodTuning::default(), DEFAULT_MAX_ERROR)
+    };
+    if others.first().map(String::as_str) == Some("--sweep") {
+        // The quality knobs one at a time against the defaults (docs/lod.md).
+        let d = LodTuning::default();
+        let variants: Vec<(&str, LodTuning, f32)> = vec![
+            ("default", d, DEFAULT_MAX_ERROR),
+            (
+                "no-regularize",
+                LodTuning {
+                    regularize: false,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "no-pose",
+                LodTuning {
+                    pose_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "pose-0.25",
+                LodTuning {
+                    pose_weight: 0.25,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "pose-4",
+                LodTuning {
+                    pose_weight: 4.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "normal-0",
+                LodTuning {
+                    normal_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "normal-2",
+                LodTuning {
+                    normal_weight: 2.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "uv-0",
+                LodTuning {
+                    uv_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "uv-2",
+                LodTuning {
+                    uv_weight: 2.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "attrs-0",
+                LodTuning {
+                    normal_weight: 0.0,
+                    uv_weight: 0.0,
+                    pose_weight: 0.0,
+                    ..d
+                },
+                DEFAULT_MAX_ERROR,
+            ),
+            ("max-error-0.02", d, 0.02),
+            ("max-error-0.1", d, 0.1),
+        ];
+        let mut rows = Vec::new();
+        for (label, tuning, max_error) in variants {
+            rows.extend(sinew_tuned(vec![0.5, 0.25], label, tuning, max_error));
+        }
+        print_rows(&rows, base_tris);
+        return;
+    }
+    let mut rows = sinew_rows(vec![0.5, 0.25], "nominal");
+    let mut reached = Vec::new();
+    for other in others {
+        let o = import_path(Path::new(other), &options).expect("import other");
+        let tris = triangles(&o, None);
+        let opose = mid_pose(&o);
+        let (h, posed) = measure(&o, None, opose.as_ref().map(|(p, _, _)| p.as_slice()));
+        let name = Path::new(other)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        rows.push(Row {
+            tool: format!("other {name}"),
+            triangles: tris,
+            hausdorff: h,
+            posed,
+            seconds: f64::NAN,
+        });
+        reached.push(tris as f32 / base_tris as f32);
+    }
+    if !reached.is_empty() {
+        let mut ratios = reached.clone();
+        ratios.sort_by(|a, b| b.total_cmp(a));
+        let ratios: Vec<f32> = ratios.into_iter().map(|r| r.clamp(1e-4, 1.0)).collect();
+        rows.extend(sinew_rows(ratios, "matched"));
+    }
+    print_rows(&rows, base_tris);
+}

@@ -566,3 +566,43 @@ fn asset_without_map(a: &Asset) -> Asset {
         ..a.clone()
     }
 }
+
+#[test]
+fn ms3d_characters_bake_to_every_format() {
+    check_character("ms3d/ninja.ms3d");
+    check_character("ms3d/zombie.ms3d");
+}
+
+#[test]
+fn ms3d_source_order_has_the_source_vertex_count() {
+    let Some(asset) = load("ms3d/ninja.ms3d") else {
+        return;
+    };
+    let map = asset.source_vertex(0).unwrap().clone();
+    let req = BakeRequest {
+        vertex_order: VertexOrder::Source,
+        ..Default::default()
+    };
+    let src = bake::bake(&asset, &req).unwrap();
+    let split = bake::bake(&asset, &BakeRequest::default()).unwrap();
+    let ns = map.source_vertex_count as usize;
+    let nv = split.frames.vertex_count;
+    assert_eq!(src.frames.vertex_count, ns);
+    // Each source vertex carries the values of the first split vertex made from it.
+    for s in [0, ns / 2, ns - 1] {
+        let v = map.map.iter().position(|&m| m as usize == s).unwrap();
+        let f = src.frames.frame_count - 1;
+        assert_eq!(
+            src.frames.positions[f * ns + s],
+            split.frames.positions[f * nv + v]
+        );
+    }
+    let opts = CacheOptions {
+        format: CacheFormat::Mdd,
+        ..Default::default()
+    };
+    let enc = verify::encode(&src, &req, &opts, "ninja.ms3d", "n").unwrap();
+    assert!(verify::verify(&asset, &enc.sidecar, &enc.cache, None)
+        .unwrap()
+        .identical());
+}

@@ -13,8 +13,7 @@ fn benches(c: &mut Criterion) {
         return;
     };
     let scene = sinew_import::import_path(&path, &Default::default()).unwrap();
-    let asset =
-        format::read(&sinew_pipeline::compile::compile_to_bytes(&scene).unwrap()).unwrap();
+    let asset = format::read(&sinew_pipeline::compile::compile_to_bytes(&scene).unwrap()).unwrap();
     let req = BakeRequest::default();
     let baked = bake::bake(&asset, &req).unwrap();
     let vf = (baked.frames.vertex_count * baked.frames.frame_count) as u64;

@@ -64,6 +64,16 @@ pub enum Command {
         after_help = "Examples:\n  sinew completions bash > ~/.local/share/bash-completion/completions/sinew\n  sinew completions zsh > ~/.zfunc/_sinew"
     )]
     Completions(CompletionsArgs),
+    /// Bake a skinned vertex cache (EXR VAT, PC2 or MDD) with sinew-core, plus sidecar and OBJ.
+    #[command(
+        after_help = "Examples:\n  sinew bake fixtures/biped.sinew --clip walk --format exr -o walk.exr\n  sinew bake fixtures/biped.sinew --layer walk --layer wave@upper:0.8 --format exr -o crowd.exr\n  sinew bake CesiumMan.glb --format pc2 --vertex-order source -o man.pc2\n\nWrites OUT, its sidecar (<stem>-remap_info.json for EXR, OUT.json otherwise), OUT.obj and,\nfor EXR with --normals file, <stem>_normals.exr. Layout: docs/formats/vat.md."
+    )]
+    Bake(BakeArgs),
+    /// Check a baked cache bit for bit against a re-bake through sinew-core (exit 1 on a difference).
+    #[command(
+        after_help = "Examples:\n  sinew verify walk.exr --against fixtures/biped.sinew\n  sinew verify man.pc2 --against man.sinew --json"
+    )]
+    Verify(VerifyArgs),
 }
 
 /// Import options shared by every command that reads source files.
@@ -214,6 +224,104 @@ pub struct LodCmdArgs {
     #[command(flatten)]
     pub lod: LodArgs,
     /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `--format` of `sinew bake`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CacheFormatArg {
+    /// OpenEXR vertex animation texture.
+    Exr,
+    /// PC2 point cache.
+    Pc2,
+    /// MDD point cache.
+    Mdd,
+}
+
+/// `--vertex-order` of `sinew bake`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VertexOrderArg {
+    /// sinew's split vertex order.
+    Split,
+    /// The source file's vertex order (LOD 0).
+    Source,
+}
+
+/// `--vat-encoding` of `sinew bake`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum VatEncodingArg {
+    /// Absolute positions, f32 (lossless).
+    AbsoluteF32,
+    /// Offsets from the bind pose, f16.
+    OffsetF16,
+    /// Offsets from the bind pose, f32 (lossless).
+    OffsetF32,
+}
+
+/// `--normals` of `sinew bake`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum NormalsArg {
+    /// Layer `N` of the position file.
+    Layer,
+    /// A second file `<stem>_normals.exr`.
+    File,
+    /// No normals.
+    None,
+}
+
+/// `sinew bake`.
+#[derive(Debug, Args)]
+pub struct BakeArgs {
+    /// The file to bake (.sinew, or any source file sinew imports).
+    pub file: PathBuf,
+    /// Clip to bake (repeatable; default: every clip in file order).
+    #[arg(long, value_name = "NAME")]
+    pub clip: Vec<String>,
+    /// Layer of a layered bake: CLIP[@MASK][:WEIGHT] (repeatable).
+    #[arg(long, value_name = "SPEC")]
+    pub layer: Vec<String>,
+    /// Frames per second (default: the first clip's sample rate).
+    #[arg(long, value_name = "N")]
+    pub fps: Option<f32>,
+    /// Cache format.
+    #[arg(long, value_enum)]
+    pub format: CacheFormatArg,
+    /// Output cache file.
+    #[arg(short = 'o', long = "output", value_name = "OUT")]
+    pub output: PathBuf,
+    /// Mesh index.
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    pub mesh: usize,
+    /// LOD to bake.
+    #[arg(long, default_value_t = 0, value_name = "K")]
+    pub lod: usize,
+    /// Vertex order of the cache.
+    #[arg(long, value_enum, default_value_t = VertexOrderArg::Split)]
+    pub vertex_order: VertexOrderArg,
+    /// EXR: largest texture width; wider meshes wrap into more rows per frame.
+    #[arg(long, default_value_t = 4096, value_name = "W")]
+    pub max_width: usize,
+    /// EXR: how positions are stored.
+    #[arg(long, value_enum, default_value_t = VatEncodingArg::OffsetF16)]
+    pub vat_encoding: VatEncodingArg,
+    /// EXR: where normals go.
+    #[arg(long, value_enum, default_value_t = NormalsArg::File)]
+    pub normals: NormalsArg,
+    /// Import options (source files).
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew verify`.
+#[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// The cache to check (.exr, .pc2 or .mdd, with its sidecar beside it).
+    pub cache: PathBuf,
+    /// The file it was baked from.
+    #[arg(long, value_name = "FILE")]
+    pub against: PathBuf,
+    /// Import options (source files).
     #[command(flatten)]
     pub import: ImportArgs,
 }

@@ -1,11 +1,13 @@
 //! One module per subcommand; [`run`] dispatches.
 
+pub mod bake;
 pub mod completions;
 pub mod convert;
 pub mod inspect;
 pub mod lod;
 pub mod map;
 pub mod split;
+pub mod verify;
 
 use crate::cli::Command;
 use crate::output::Ctx;
@@ -20,5 +22,7 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
         Command::Map(args) => map::run(&args, ctx),
         Command::Split(args) => split::run(&args, ctx),
         Command::Lod(args) => lod::run(&args, ctx),
+        Command::Bake(args) => bake::run(&args, ctx),
+        Command::Verify(args) => verify::run(&args, ctx),
     }
 }

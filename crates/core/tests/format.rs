@@ -97,7 +97,7 @@ fn full_asset_round_trips_and_header_bytes_are_as_documented() {
     let bytes = format::write(&asset).unwrap();
     assert_eq!(&bytes[0..8], b"\x89SNW\r\n\x1a\n");
     assert_eq!(u16_at(&bytes, 8), 1);
-    assert_eq!(u16_at(&bytes, 10), 0);
+    assert_eq!(u16_at(&bytes, 10), 1);
     assert_eq!(u32_at(&bytes, 12), 0);
     assert_eq!(u64_at(&bytes, 16), bytes.len() as u64);
     assert_eq!(u64_at(&bytes, 24), 48);
@@ -108,7 +108,7 @@ fn full_asset_round_trips_and_header_bytes_are_as_documented() {
     // The first section starts right after the 48 + 5 * 32 = 208-byte header and table.
     assert_eq!(u64_at(&bytes, 48 + 8), 208);
     // An independent assembler from the documented layout gives the same bytes.
-    assert_eq!(assemble(1, 0, &split(&bytes)), bytes);
+    assert_eq!(assemble(1, 1, &split(&bytes)), bytes);
 
     let back = format::read(&bytes).unwrap();
     assert_eq!(back, asset);

@@ -2,9 +2,9 @@
 //!
 //! The scene it builds is what `sinew_pipeline::compile` would compile back to the same asset:
 //! - the skeleton as stored;
-//! - per mesh, LOD 0 as the geometry (with `source_vertex` the identity map) and further LODs as
+//! - per mesh, LOD 0 as the geometry (with `source_vertex` the stored SRCV map, else the identity map) and further LODs as
 //!   [`GeneratedLod`]s carrying the stored figures;
-//! - materials as stored;
+//! - materials and masks as stored;
 //! - per clip, one curve per stored channel: an animated channel gets a key at every stored key time
 //!   with the stored frame value; a constant channel one key at time 0; a bind channel no keys. Values
 //!   are copied, never interpolated, so compiling the scene again gives the same key times and frames.
@@ -39,6 +39,8 @@ fn to_import_error(file_name: &str, e: FormatError) -> ImportError {
 pub fn scene_from_asset(asset: Asset) -> Scene {
     let mut scene = Scene::new(SourceFormat::Sinew);
     let lod_info = asset.lod_info.clone();
+    let maps = asset.source_vertex;
+    scene.masks = asset.masks;
     for (mi, mesh) in asset.meshes.into_iter().enumerate() {
         let mut lods = mesh.lods.into_iter().enumerate();
         let geometry = lods.next().map(|(_, l)| l).unwrap_or_default();
@@ -60,11 +62,15 @@ pub fn scene_from_asset(asset: Asset) -> Scene {
                 }
             })
             .collect();
+        let (source_vertex, source_vertex_count) = match maps.get(mi).cloned().flatten() {
+            Some(m) => (m.map, m.source_vertex_count),
+            None => ((0..n).collect(), n),
+        };
         scene.meshes.push(Mesh {
             name: mesh.name,
             geometry,
-            source_vertex: (0..n).collect(),
-            source_vertex_count: n,
+            source_vertex,
+            source_vertex_count,
             lods: generated,
         });
     }
@@ -217,6 +223,7 @@ mod tests {
                 },
             ]],
             clips: vec![clip()],
+            ..Default::default()
         }
     }
 

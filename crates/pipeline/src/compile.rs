@@ -8,11 +8,13 @@
 //! - Each [`sinew_scene::SceneClip`] becomes a [`Clip`] through [`Clip::from_curves`], which keeps every
 //!   source key time, so sampling the compiled clip at a source key gives the source value exactly.
 //! - Materials are copied.
+//! - Each mesh's `source_vertex` map (when it has one entry per LOD-0 vertex, all below
+//!   `source_vertex_count`) goes to [`Asset::source_vertex`] (the SRCV section); masks are copied.
 //!
 //! The result is checked with [`format::validate`], so compiling succeeds exactly when writing will.
 
 use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions};
-use sinew_core::format::{self, Asset, FormatError, LodInfo, Material};
+use sinew_core::format::{self, Asset, FormatError, LodInfo, Material, SourceVertexMap};
 use sinew_core::{Clip, ClipError, Mesh};
 use sinew_scene::Scene;
 
@@ -36,7 +38,18 @@ pub enum CompileError {
 pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
     let mut meshes = Vec::with_capacity(scene.meshes.len());
     let mut lod_info = Vec::with_capacity(scene.meshes.len());
+    let mut source_vertex = Vec::with_capacity(scene.meshes.len());
     for m in &scene.meshes {
+        // The map is kept when it has one entry per LOD-0 vertex, each below the source count;
+        // an identity map over the whole source is kept too (it is what the user's file has).
+        let map = SourceVertexMap {
+            source_vertex_count: m.source_vertex_count,
+            map: m.source_vertex.clone(),
+        };
+        let ok = !map.map.is_empty()
+            && map.map.len() == m.geometry.positions.len()
+            && map.map.iter().all(|&s| s < map.source_vertex_count);
+        source_vertex.push(ok.then_some(map));
         let mut lods = Vec::with_capacity(1 + m.lods.len());
         let mut info = Vec::with_capacity(1 + m.lods.len());
         lods.push(m.geometry.clone());
@@ -92,6 +105,8 @@ pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
         meshes,
         lod_info,
         clips,
+        source_vertex,
+        masks: scene.masks.clone(),
     };
     format::validate(&asset)?;
     Ok(asset)

@@ -2,6 +2,7 @@
 //! LOD generation, keyframe reduction and quantization, compiling a Scene into the `.sinew` runtime
 //! format, baking vertex caches and verifying them against the runtime.
 
+pub mod bake;
 pub mod cache;
 pub mod compile;
 pub mod compress;
@@ -10,5 +11,6 @@ pub mod lod;
 pub mod mapping;
 pub mod retarget;
 pub mod split;
+pub mod verify;
 
 pub use cut::{cut_clips, CutError};

@@ -153,6 +153,9 @@ pub struct SceneClip {
     pub tracks: Vec<TrackCurves>,
 }
 
+/// A named per-joint weight mask: `(joint name, weight)` pairs, unlisted joints weigh 0.
+pub use sinew_core::format::Mask;
+
 /// An imported asset: at most one skeleton, any number of meshes and clips.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
@@ -168,6 +171,8 @@ pub struct Scene {
     pub clips: Vec<SceneClip>,
     /// Everything the importer and later steps noticed.
     pub diagnostics: Vec<Diagnostic>,
+    /// Named joint masks (from `split` or `--mask`), carried into the `.sinew` MASK section.
+    pub masks: Vec<Mask>,
 }
 
 impl Scene {
@@ -180,6 +185,7 @@ impl Scene {
             materials: Vec::new(),
             clips: Vec::new(),
             diagnostics: Vec::new(),
+            masks: Vec::new(),
         }
     }
 

@@ -25,10 +25,12 @@ use std::fmt;
 pub const MAGIC: [u8; 8] = [0x89, b'S', b'N', b'W', b'\r', b'\n', 0x1A, b'\n'];
 /// Major version this crate writes and reads. Files with another major version are rejected.
 pub const VERSION_MAJOR: u16 = 1;
-/// Minor version this crate writes. Files with a higher minor version still load.
-pub const VERSION_MINOR: u16 = 0;
-/// Minor version written when a file holds compressed clips (clip flag bit 2), which 1.0 readers reject.
-pub const VERSION_MINOR_COMPRESSED: u16 = 1;
+/// Minor version this crate writes (1.1 added the source-vertex map and mask sections, which 1.0
+/// readers skip). Files with a higher minor version still load.
+pub const VERSION_MINOR: u16 = 1;
+/// Minor version written when a file holds compressed clips (clip flag bit 2), which 1.0 and 1.1
+/// readers reject.
+pub const VERSION_MINOR_COMPRESSED: u16 = 2;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).
@@ -57,13 +59,19 @@ impl Tag {
     pub const MESHES: Tag = Tag(*b"MESH");
     /// The clips.
     pub const CLIPS: Tag = Tag(*b"CLIP");
+    /// Source-vertex maps of LOD 0 (since 1.1).
+    pub const SOURCE_VERTICES: Tag = Tag(*b"SRCV");
+    /// Named joint masks (since 1.1).
+    pub const MASKS: Tag = Tag(*b"MASK");
     /// The tags version 1 defines, in the order the writer emits them.
-    pub const KNOWN: [Tag; 5] = [
+    pub const KNOWN: [Tag; 7] = [
         Tag::STRINGS,
         Tag::SKELETON,
         Tag::MATERIALS,
         Tag::MESHES,
         Tag::CLIPS,
+        Tag::SOURCE_VERTICES,
+        Tag::MASKS,
     ];
 
     /// True for the tags version 1 defines.
@@ -146,6 +154,38 @@ impl Default for LodInfo {
     }
 }
 
+/// For each LOD-0 vertex of one mesh, the index of the source file's vertex it was split from.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct SourceVertexMap {
+    /// Number of vertices in the source file's own vertex list; every `map` entry is below it.
+    pub source_vertex_count: u32,
+    /// One source vertex index per LOD-0 vertex.
+    pub map: Vec<u32>,
+}
+
+/// A named per-joint weight mask (for masked blending), joints named as in the skeleton.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mask {
+    /// Unique mask name (`upper`, `lower`...).
+    pub name: String,
+    /// `(joint name, weight)` pairs; joints not listed have weight 0.
+    pub weights: Vec<(String, f32)>,
+}
+
+impl Mask {
+    /// One weight per joint of `skeleton` (0 for joints the mask does not name; names the skeleton
+    /// lacks are ignored; a joint named twice takes its last weight).
+    pub fn per_joint(&self, skeleton: &Skeleton) -> Vec<f32> {
+        let mut out = vec![0.0; skeleton.len()];
+        for (name, w) in &self.weights {
+            if let Some(slot) = skeleton.find(name).and_then(|j| out.get_mut(j as usize)) {
+                *slot = *w;
+            }
+        }
+        out
+    }
+}
+
 /// Everything a `.sinew` file holds. Any part may be empty: a file may hold a skeleton and meshes, or
 /// clips alone (a motion file bound by joint name to other rigs).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -161,6 +201,11 @@ pub struct Asset {
     pub lod_info: Vec<Vec<LodInfo>>,
     /// Clips; their tracks name joints, which need not exist in `skeleton`.
     pub clips: Vec<Clip>,
+    /// Per mesh: the source-vertex map of LOD 0, or `None`. May be shorter than `meshes` (missing
+    /// entries are `None`). Written in the SRCV section (format 1.1).
+    pub source_vertex: Vec<Option<SourceVertexMap>>,
+    /// Named joint masks, in order. Written in the MASK section (format 1.1).
+    pub masks: Vec<Mask>,
 }
 
 impl Asset {
@@ -171,6 +216,16 @@ impl Asset {
             .and_then(|m| m.get(lod))
             .copied()
             .unwrap_or_default()
+    }
+
+    /// The source-vertex map of mesh `mesh`, if stored.
+    pub fn source_vertex(&self, mesh: usize) -> Option<&SourceVertexMap> {
+        self.source_vertex.get(mesh).and_then(Option::as_ref)
+    }
+
+    /// The mask named `name`.
+    pub fn mask(&self, name: &str) -> Option<&Mask> {
+        self.masks.iter().find(|m| m.name == name)
     }
 }
 
@@ -253,6 +308,8 @@ pub fn validate(asset: &Asset) -> Result<(), FormatError> {
             "more than 2^32-1 clips or materials",
         ));
     }
+    check_source_vertex(asset)?;
+    check_masks(&asset.masks)?;
     for c in &asset.clips {
         let fits = |n: usize| u32::try_from(n).is_ok();
         if !fits(c.times().len()) || !fits(c.tracks().len()) || !fits(c.stride()) {
@@ -267,6 +324,80 @@ pub fn validate(asset: &Asset) -> Result<(), FormatError> {
                 "CLIP",
                 None,
                 format!("clip {:?}: non-finite sample rate", c.name()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn check_source_vertex(asset: &Asset) -> Result<(), FormatError> {
+    if asset.source_vertex.len() > asset.meshes.len() {
+        return Err(FormatError::invalid(
+            "SRCV",
+            None,
+            "more source-vertex maps than meshes",
+        ));
+    }
+    for (mi, m) in asset.source_vertex.iter().enumerate() {
+        let Some(m) = m else { continue };
+        let n = asset
+            .meshes
+            .get(mi)
+            .and_then(|mesh| mesh.lods.first())
+            .map_or(0, Lod::vertex_count);
+        check_source_map(m, n)
+            .map_err(|e| FormatError::invalid("SRCV", None, format!("mesh {mi}: {e}")))?;
+    }
+    Ok(())
+}
+
+/// The rules of one source-vertex map for a LOD 0 of `vertices` vertices.
+pub(crate) fn check_source_map(m: &SourceVertexMap, vertices: usize) -> Result<(), String> {
+    if m.map.len() != vertices {
+        return Err(format!(
+            "{} map entries for {vertices} LOD-0 vertices",
+            m.map.len()
+        ));
+    }
+    if let Some((v, &s)) = m
+        .map
+        .iter()
+        .enumerate()
+        .find(|(_, &s)| s >= m.source_vertex_count)
+    {
+        return Err(format!(
+            "vertex {v} maps to source vertex {s}, but the source has {}",
+            m.source_vertex_count
+        ));
+    }
+    Ok(())
+}
+
+/// The rules of the mask list: names unique, weights finite, counts fit in 32 bits.
+pub(crate) fn check_masks(masks: &[Mask]) -> Result<(), FormatError> {
+    if u32::try_from(masks.len()).is_err() {
+        return Err(FormatError::invalid("MASK", None, "more than 2^32-1 masks"));
+    }
+    for (i, m) in masks.iter().enumerate() {
+        if masks[..i].iter().any(|o| o.name == m.name) {
+            return Err(FormatError::invalid(
+                "MASK",
+                None,
+                format!("mask name {:?} appears twice", m.name),
+            ));
+        }
+        if u32::try_from(m.weights.len()).is_err() {
+            return Err(FormatError::invalid(
+                "MASK",
+                None,
+                format!("mask {:?} has more than 2^32-1 weights", m.name),
+            ));
+        }
+        if let Some((j, _)) = m.weights.iter().find(|(_, w)| !w.is_finite()) {
+            return Err(FormatError::invalid(
+                "MASK",
+                None,
+                format!("mask {:?}: non-finite weight for joint {j:?}", m.name),
             ));
         }
     }

@@ -6,9 +6,9 @@ use super::write::{
     KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, MATERIAL_RECORD, TRACK_RECORD,
 };
 use super::{
-    check_lod, Asset, FormatError, FormatErrorKind as K, LodInfo, Material, SectionInfo, Tag,
-    ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING, SECTION_ENTRY_SIZE, SECTION_VERSION,
-    VERSION_MAJOR,
+    check_lod, check_source_map, Asset, FormatError, FormatErrorKind as K, LodInfo, Mask, Material,
+    SectionInfo, SourceVertexMap, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR,
 };
 use crate::clip::{Channel, Track};
 use crate::{Clip, Lod, Mesh, Skeleton, Submesh, Transform};
@@ -280,7 +280,7 @@ pub fn sections(bytes: &[u8]) -> Result<Vec<SectionInfo>> {
 /// version. The decoded skeleton, meshes and clips are validated as [`super::validate`] describes.
 pub fn read(bytes: &[u8]) -> Result<Asset> {
     let container = parse_container(bytes)?;
-    let mut found: [Option<&SectionInfo>; 5] = [None; 5];
+    let mut found: [Option<&SectionInfo>; Tag::KNOWN.len()] = [None; Tag::KNOWN.len()];
     for s in &container.sections {
         if !s.checksum_ok {
             let body = bytes
@@ -343,13 +343,101 @@ pub fn read(bytes: &[u8]) -> Result<Asset> {
         Some(mut c) => clips(&mut c, &strs)?,
         None => Vec::new(),
     };
+    let source_vertex = match cur(5) {
+        Some(mut c) => source_vertices(&mut c, &meshes)?,
+        None => Vec::new(),
+    };
+    let masks = match cur(6) {
+        Some(mut c) => masks(&mut c, &strs)?,
+        None => Vec::new(),
+    };
     Ok(Asset {
         skeleton,
         materials,
         meshes,
         lod_info,
         clips,
+        source_vertex,
+        masks,
     })
+}
+
+fn source_vertices(c: &mut Cur, meshes: &[Mesh]) -> Result<Vec<Option<SourceVertexMap>>> {
+    let count = c.u32()?;
+    c.skip(12)?;
+    let count = c.check_count(count.into(), 16, "source-vertex maps")?;
+    let mut out: Vec<Option<SourceVertexMap>> = Vec::new();
+    for _ in 0..count {
+        c.align()?;
+        let at = c.pos;
+        let mesh = c.u32()?;
+        let n = c.u32()?;
+        let source_vertex_count = c.u32()?;
+        c.skip(4)?;
+        let mi = mesh as usize;
+        if mi >= meshes.len() || mi < out.len() {
+            return Err(c.err_at(
+                at,
+                K::IndexOutOfRange {
+                    what: "source-vertex map mesh (out of range or not increasing)",
+                    index: mesh.into(),
+                    limit: meshes.len() as u64,
+                },
+            ));
+        }
+        let b = c.elements(n.into(), 4, "source-vertex map entries")?;
+        let m = SourceVertexMap {
+            source_vertex_count,
+            map: b
+                .chunks_exact(4)
+                .map(|x| u32::from_le_bytes([x[0], x[1], x[2], x[3]]))
+                .collect(),
+        };
+        let vertices = meshes
+            .get(mi)
+            .and_then(|m| m.lods.first())
+            .map_or(0, Lod::vertex_count);
+        check_source_map(&m, vertices)
+            .map_err(|e| c.err_at(at, K::Invalid(format!("mesh {mi}: {e}"))))?;
+        out.resize(mi, None);
+        out.push(Some(m));
+    }
+    Ok(out)
+}
+
+fn masks(c: &mut Cur, strs: &Strs) -> Result<Vec<Mask>> {
+    let count = c.u32()?;
+    c.skip(12)?;
+    let count = c.check_count(count.into(), 16, "masks")?;
+    let mut out: Vec<Mask> = Vec::with_capacity(count);
+    for _ in 0..count {
+        c.align()?;
+        let at = c.pos;
+        let name = strs.read(c, "mask name string")?;
+        let n = c.u32()?;
+        c.skip(8)?;
+        let n = c.check_count(n.into(), 8, "mask weights")?;
+        let mut weights = Vec::with_capacity(n);
+        for _ in 0..n {
+            let joint = strs.read(c, "mask joint name string")?;
+            let w_at = c.pos;
+            let w = c.f32()?;
+            if !w.is_finite() {
+                return Err(c.err_at(
+                    w_at,
+                    K::NonFinite {
+                        what: "mask weight",
+                    },
+                ));
+            }
+            weights.push((joint, w));
+        }
+        if out.iter().any(|m| m.name == name) {
+            return Err(c.err_at(at, K::Invalid(format!("mask name {name:?} appears twice"))));
+        }
+        out.push(Mask { name, weights });
+    }
+    Ok(out)
 }
 
 fn strings(c: &mut Cur) -> Result<Vec<String>> {

@@ -8,7 +8,7 @@ use crate::clip::Channel;
 use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
-/// Encodes an asset as a `.sinew` file, version 1.0.
+/// Encodes an asset as a `.sinew` file, version 1.1.
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -28,6 +28,12 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
     }
     if !asset.clips.is_empty() {
         sections.push((Tag::CLIPS, clips(&asset.clips, &mut strings)));
+    }
+    if asset.source_vertex.iter().any(Option::is_some) {
+        sections.push((Tag::SOURCE_VERTICES, source_vertices(asset)));
+    }
+    if !asset.masks.is_empty() {
+        sections.push((Tag::MASKS, masks(&asset.masks, &mut strings)));
     }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
     let minor = if asset.clips.iter().any(Clip::is_compressed) {
@@ -473,4 +479,48 @@ fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) {
         align_from(b, start);
         b.f32s(c.frames());
     }
+}
+
+/// SRCV: `u32 entry_count; 12 zero bytes;` then per entry, 16-aligned:
+/// `u32 mesh; u32 vertex_count; u32 source_vertex_count; u32 0; u32 map[vertex_count]`.
+fn source_vertices(asset: &Asset) -> Vec<u8> {
+    let mut b = Buf::default();
+    let entries: Vec<_> = asset
+        .source_vertex
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| m.as_ref().map(|m| (i, m)))
+        .collect();
+    b.u32(entries.len() as u32);
+    b.zeros(12);
+    for (mesh, m) in entries {
+        b.align();
+        b.u32(mesh as u32);
+        b.u32(m.map.len() as u32);
+        b.u32(m.source_vertex_count);
+        b.u32(0);
+        for &s in &m.map {
+            b.u32(s);
+        }
+    }
+    b.0
+}
+
+/// MASK: `u32 mask_count; 12 zero bytes;` then per mask, 16-aligned:
+/// `u32 name; u32 weight_count; 8 zero bytes;` then `weight_count x (u32 joint name; f32 weight)`.
+fn masks(list: &[super::Mask], strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    b.u32(list.len() as u32);
+    b.zeros(12);
+    for m in list {
+        b.align();
+        b.u32(strings.get(&m.name));
+        b.u32(m.weights.len() as u32);
+        b.zeros(8);
+        for (joint, w) in &m.weights {
+            b.u32(strings.get(joint));
+            b.f32(*w);
+        }
+    }
+    b.0
 }

@@ -182,5 +182,6 @@ pub fn full_asset() -> Asset {
             vec![LodInfo::default()],
         ],
         clips: vec![walk(), wave()],
+        ..Default::default()
     }
 }

@@ -1,0 +1,156 @@
+//! `sinew bake`: skin a mesh through clips with sinew-core and write an EXR, PC2 or MDD vertex cache,
+//! its JSON sidecar and the matching mesh as OBJ.
+
+use crate::cli::{BakeArgs, CacheFormatArg, NormalsArg, VatEncodingArg, VertexOrderArg};
+use crate::output::{check_output_path, print_json, write_atomic, Ctx};
+use crate::Status;
+use anyhow::{bail, Context};
+use sinew_core::format::{self, Asset};
+use sinew_pipeline::bake::{self, BakeRequest, LayerSpec, VertexOrder};
+use sinew_pipeline::cache::vat::VatEncoding;
+use sinew_pipeline::verify::{self, CacheFormat, CacheOptions, NormalsPlacement};
+use std::path::Path;
+use std::time::Instant;
+
+/// Loads FILE as the runtime would see it: a `.sinew` is decoded as is; a source file is imported,
+/// compiled, written and read back (with LODs generated when `need_lods` and the scene has none).
+pub fn load_asset(
+    path: &Path,
+    import: &crate::cli::ImportArgs,
+    need_lods: bool,
+) -> anyhow::Result<Asset> {
+    let shown = path.display();
+    let is_sinew = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("sinew"));
+    if is_sinew {
+        crate::input::check_input(path)?;
+        let bytes = std::fs::read(path).with_context(|| format!("{shown}: reading"))?;
+        return format::read(&bytes).with_context(|| format!("{shown}"));
+    }
+    let mut scene = crate::input::import(path, import)?;
+    if need_lods && scene.meshes.iter().all(|m| m.lods.is_empty()) {
+        sinew_pipeline::lod::generate_lods(&mut scene, &Default::default())
+            .with_context(|| format!("{shown}: generating LODs"))?;
+    }
+    let bytes = sinew_pipeline::compile::compile_to_bytes(&scene)
+        .with_context(|| format!("{shown}: compiling"))?;
+    format::read(&bytes).with_context(|| format!("{shown}: reading the compiled asset back"))
+}
+
+/// Report of one bake.
+#[derive(Debug, serde::Serialize)]
+struct Report<'a> {
+    input: String,
+    outputs: Vec<String>,
+    seconds: f64,
+    sidecar: &'a verify::Sidecar,
+}
+
+/// Runs `sinew bake`.
+pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
+    let start = Instant::now();
+    let shown = args.file.display();
+    if let Some(f) = args.fps {
+        bake::check_fps(f, "").with_context(|| format!("{shown}"))?;
+    }
+    check_output_path(&args.output)?;
+    let format = match args.format {
+        CacheFormatArg::Exr => CacheFormat::Exr,
+        CacheFormatArg::Pc2 => CacheFormat::Pc2,
+        CacheFormatArg::Mdd => CacheFormat::Mdd,
+    };
+    if args.max_width == 0 {
+        bail!("--max-width must be at least 1");
+    }
+    let layers = args
+        .layer
+        .iter()
+        .map(|s| LayerSpec::parse(s))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(anyhow::Error::msg)?;
+    if !layers.is_empty() && !args.clip.is_empty() {
+        bail!("give --clip or --layer, not both");
+    }
+    let asset = load_asset(&args.file, &args.import, args.lod > 0)?;
+    let request = BakeRequest {
+        clips: args.clip.clone(),
+        layers,
+        fps: args.fps,
+        mesh: args.mesh,
+        lod: args.lod,
+        vertex_order: match args.vertex_order {
+            VertexOrderArg::Split => VertexOrder::Split,
+            VertexOrderArg::Source => VertexOrder::Source,
+        },
+    };
+    let baked = bake::bake(&asset, &request).with_context(|| format!("{shown}"))?;
+    let opts = CacheOptions {
+        format,
+        max_width: args.max_width,
+        encoding: match args.vat_encoding {
+            VatEncodingArg::AbsoluteF32 => VatEncoding::AbsoluteF32,
+            VatEncodingArg::OffsetF16 => VatEncoding::OffsetF16,
+            VatEncodingArg::OffsetF32 => VatEncoding::OffsetF32,
+        },
+        normals: match args.normals {
+            NormalsArg::Layer => NormalsPlacement::Layer,
+            NormalsArg::File => NormalsPlacement::File,
+            NormalsArg::None => NormalsPlacement::None,
+        },
+    };
+    let paths = verify::cache_paths(&args.output, format);
+    let file_name = |p: &Path| {
+        p.file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let encoded = verify::encode(
+        &baked,
+        &request,
+        &opts,
+        &file_name(&args.file),
+        &file_name(&paths.normals),
+    )
+    .map_err(anyhow::Error::msg)
+    .with_context(|| format!("{}", args.output.display()))?;
+    let sidecar_json = serde_json::to_vec_pretty(&encoded.sidecar)?;
+    // Everything is encoded before the first file is written.
+    let mut files: Vec<(&Path, &[u8])> = vec![(&paths.cache, &encoded.cache)];
+    if let Some(n) = &encoded.normals {
+        files.push((&paths.normals, n));
+    }
+    files.push((&paths.sidecar, &sidecar_json));
+    let obj = bake::obj(&baked);
+    files.push((&paths.obj, obj.as_bytes()));
+    for (p, bytes) in &files {
+        write_atomic(p, bytes)?;
+    }
+    let report = Report {
+        input: args.file.display().to_string(),
+        outputs: files.iter().map(|(p, _)| p.display().to_string()).collect(),
+        seconds: start.elapsed().as_secs_f64(),
+        sidecar: &encoded.sidecar,
+    };
+    if ctx.json {
+        print_json(&report)?;
+    } else if ctx.human() {
+        let s = &encoded.sidecar;
+        eprintln!(
+            "baked {} frames x {} vertices at {} fps from {} in {:.2} s",
+            s.frame_count, s.vertex_count, s.fps, shown, report.seconds
+        );
+        for c in &s.clips {
+            eprintln!(
+                "  {}: frames {}..{}",
+                c.name,
+                c.first_frame,
+                c.first_frame + c.frame_count
+            );
+        }
+        for o in &report.outputs {
+            eprintln!("  wrote {o}");
+        }
+    }
+    Ok(Status::Success)
+}

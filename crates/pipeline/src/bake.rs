@@ -1,0 +1,585 @@
+//! Baking skinned vertex caches: every frame of one or more clips (or of a blend of layers) skinned
+//! with the runtime's own functions ([`sinew_core::Sampler`], [`sinew_core::BlendBuffers`],
+//! [`sinew_core::local_to_model`], [`sinew_core::skinning_palette`], [`sinew_core::skin_lod`]) on the
+//! decoded [`Asset`], so that a cache can be checked bit for bit against what a game draws.
+//!
+//! # Frames
+//!
+//! A clip of duration `d` baked at `fps` has `n = ceil(d * fps - 1e-3) + 1` frames (the small tolerance
+//! keeps a product like `29.999998` from adding a frame); frame `i < n - 1` is clip time `i / fps`
+//! (computed in f64, rounded to f32) and frame `n - 1` is exactly `d`. A looping clip sampled at `d`
+//! wraps to its start, as the runtime does. Clips are baked one after another in the requested order
+//! (file order when none is requested).
+//!
+//! A layered bake blends its layers per frame through [`BlendBuffers`]: normal layers accumulate with
+//! their weight times their mask (a MASK section entry of the file), then additive layers are applied.
+//! It runs over the duration (and at the sample rate, unless `fps` is given) of the first layer.
+//!
+//! Frames are skinned in parallel with rayon; every frame is computed from scratch (fresh sampler and
+//! pose), so the result is the same bits for any thread count.
+//!
+//! # Vertex order
+//!
+//! [`VertexOrder::Split`] is the LOD's own vertex order. [`VertexOrder::Source`] (LOD 0 only) is the
+//! source file's vertex order through the file's source-vertex map: source vertex `s` takes the values of
+//! the first LOD-0 vertex that maps to it. Every source vertex must be used.
+
+use crate::cache::Frames;
+use rayon::prelude::*;
+use sinew_core::format::Asset;
+use sinew_core::glam::{Mat4, Vec3};
+use sinew_core::{
+    apply_additive, local_to_model, skin_lod, skinning_palette, BlendBuffers, BlendError, Clip,
+    ClipBinding, ClipError, Layer, Lod, Sampler, SkinError, Transform,
+};
+
+/// Highest frame rate a bake accepts.
+pub const MAX_FPS: f32 = 1000.0;
+/// Most frames one bake may produce.
+pub const MAX_FRAMES: usize = 1 << 20;
+
+/// Which vertex order a cache follows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VertexOrder {
+    /// sinew's split vertex order (the LOD's vertex buffer).
+    #[default]
+    Split,
+    /// The source file's vertex order (LOD 0 only; needs the file's source-vertex map).
+    Source,
+}
+
+/// One layer of a layered bake: `clip[@mask][:weight]`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LayerSpec {
+    /// Clip name.
+    pub clip: String,
+    /// Mask name (MASK section), or none for every joint.
+    pub mask: Option<String>,
+    /// Layer weight.
+    pub weight: f32,
+}
+
+impl LayerSpec {
+    /// Parses `clip`, `clip@mask`, `clip:0.8` or `clip@mask:0.8`. The weight must be finite and >= 0.
+    pub fn parse(spec: &str) -> Result<Self, String> {
+        let (rest, weight) = match spec.rsplit_once(':') {
+            Some((r, w)) => {
+                let w: f32 = w
+                    .parse()
+                    .map_err(|_| format!("layer {spec:?}: weight {w:?} is not a number"))?;
+                if !w.is_finite() || w < 0.0 {
+                    return Err(format!("layer {spec:?}: weight must be finite and >= 0"));
+                }
+                (r, w)
+            }
+            None => (spec, 1.0),
+        };
+        let (clip, mask) = match rest.split_once('@') {
+            Some((c, m)) => (c, Some(m.to_string())),
+            None => (rest, None),
+        };
+        if clip.is_empty() || mask.as_deref() == Some("") {
+            return Err(format!(
+                "layer {spec:?}: expected CLIP[@MASK][:WEIGHT], e.g. wave@upper:0.8"
+            ));
+        }
+        Ok(Self {
+            clip: clip.to_string(),
+            mask,
+            weight,
+        })
+    }
+}
+
+/// What to bake.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BakeRequest {
+    /// Clips baked one after another; empty (with no layers) = every clip in file order.
+    pub clips: Vec<String>,
+    /// Layers of a layered bake (when non-empty, `clips` must be empty).
+    pub layers: Vec<LayerSpec>,
+    /// Frames per second; default: the sample rate of the first clip (or first layer's clip).
+    pub fps: Option<f32>,
+    /// Mesh index.
+    pub mesh: usize,
+    /// LOD index.
+    pub lod: usize,
+    /// Vertex order of the output.
+    pub vertex_order: VertexOrder,
+}
+
+/// A range of frames in a bake.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ClipRange {
+    /// Clip name (for a layered bake, the layers joined with `+`).
+    pub name: String,
+    /// First frame of the range.
+    pub first_frame: usize,
+    /// Number of frames.
+    pub frame_count: usize,
+    /// Whether the clip loops.
+    pub looping: bool,
+    /// Clip duration, seconds.
+    pub duration: f32,
+}
+
+/// The result of a bake.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Baked {
+    /// Skinned frames in the requested vertex order (normals empty when the LOD has none).
+    pub frames: Frames,
+    /// Frame ranges, in bake order.
+    pub clips: Vec<ClipRange>,
+    /// Bind-pose positions in the output vertex order.
+    pub bind_positions: Vec<Vec3>,
+    /// Triangles in the output vertex order.
+    pub indices: Vec<u32>,
+    /// Name of the mesh.
+    pub mesh_name: String,
+}
+
+/// Why a bake was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BakeError {
+    /// The file has no skeleton.
+    #[error("the file has no skeleton to skin with")]
+    NoSkeleton,
+    /// The mesh index is out of range.
+    #[error("mesh {mesh} does not exist; the file has {count} meshes")]
+    NoMesh {
+        /// Requested mesh.
+        mesh: usize,
+        /// Meshes in the file.
+        count: usize,
+    },
+    /// The LOD index is out of range.
+    #[error("LOD {lod} does not exist; mesh {mesh:?} has LODs 0..={last}")]
+    NoLod {
+        /// Requested LOD.
+        lod: usize,
+        /// Mesh name.
+        mesh: String,
+        /// Last LOD index.
+        last: usize,
+    },
+    /// The LOD has no joint weights.
+    #[error("mesh {0:?} is not skinned")]
+    NotSkinned(String),
+    /// A clip name is not in the file.
+    #[error("no clip {name:?}; the file has: {}", list(available))]
+    UnknownClip {
+        /// Requested name.
+        name: String,
+        /// Clips in the file, in order.
+        available: Vec<String>,
+    },
+    /// A mask name is not in the file.
+    #[error("no mask {name:?}; the file has: {}", list(available))]
+    UnknownMask {
+        /// Requested name.
+        name: String,
+        /// Masks in the file.
+        available: Vec<String>,
+    },
+    /// Nothing to bake.
+    #[error("the file has no clips to bake")]
+    NoClips,
+    /// Both clips and layers were requested.
+    #[error("give clips or layers, not both")]
+    ClipsAndLayers,
+    /// The frame rate is unusable.
+    #[error("fps {0} is not usable: it must be a number above 0 and at most 1000{1}")]
+    BadFps(f32, &'static str),
+    /// Too many frames.
+    #[error("{0} frames exceed the limit of {MAX_FRAMES}")]
+    TooManyFrames(usize),
+    /// Source order was requested but cannot be produced.
+    #[error("source vertex order: {0}")]
+    SourceOrder(String),
+    /// Sampling failed.
+    #[error("sampling clip {clip:?}: {source}")]
+    Clip {
+        /// Clip name.
+        clip: String,
+        /// Runtime error.
+        source: ClipError,
+    },
+    /// Blending failed.
+    #[error("blending: {0}")]
+    Blend(#[from] BlendError),
+    /// Skinning failed.
+    #[error("skinning: {0}")]
+    Skin(#[from] SkinError),
+}
+
+fn list(names: &[String]) -> String {
+    if names.is_empty() {
+        "(none)".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+/// Number of frames for a clip of `duration` seconds at `fps` (see the module docs).
+pub fn frame_count(duration: f32, fps: f32) -> usize {
+    let span = (f64::from(duration.max(0.0)) * f64::from(fps) - 1e-3).ceil();
+    if span.is_finite() && span > 0.0 {
+        (span as usize).saturating_add(1)
+    } else {
+        1
+    }
+}
+
+/// Clip time of frame `i` of `n` (see the module docs).
+pub fn frame_time(i: usize, n: usize, duration: f32, fps: f32) -> f32 {
+    if i + 1 >= n && i > 0 {
+        duration
+    } else {
+        (i as f64 / f64::from(fps)) as f32
+    }
+}
+
+/// Checks a frame rate: finite, above 0, at most [`MAX_FPS`].
+pub fn check_fps(fps: f32, hint: &'static str) -> Result<f32, BakeError> {
+    if fps.is_finite() && fps > 0.0 && fps <= MAX_FPS {
+        Ok(fps)
+    } else {
+        Err(BakeError::BadFps(fps, hint))
+    }
+}
+
+/// One layer resolved against the file.
+struct Resolved<'a> {
+    clip: &'a Clip,
+    binding: ClipBinding,
+    mask: Option<Vec<f32>>,
+    weight: f32,
+}
+
+/// One contiguous segment of the bake: layers sampled at the same times.
+struct Segment<'a> {
+    layers: Vec<Resolved<'a>>,
+    first_frame: usize,
+    frame_count: usize,
+    duration: f32,
+}
+
+/// Bakes the request on a decoded asset.
+pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
+    let skeleton = asset.skeleton.as_ref().ok_or(BakeError::NoSkeleton)?;
+    let mesh = asset.meshes.get(req.mesh).ok_or(BakeError::NoMesh {
+        mesh: req.mesh,
+        count: asset.meshes.len(),
+    })?;
+    let lod = mesh.lods.get(req.lod).ok_or_else(|| BakeError::NoLod {
+        lod: req.lod,
+        mesh: mesh.name.clone(),
+        last: mesh.lods.len().saturating_sub(1),
+    })?;
+    if !lod.is_skinned() {
+        return Err(BakeError::NotSkinned(mesh.name.clone()));
+    }
+    let order = output_order(asset, req, lod)?;
+    let names: Vec<String> = asset.clips.iter().map(|c| c.name().to_string()).collect();
+    let find = |name: &str| {
+        asset
+            .clips
+            .iter()
+            .find(|c| c.name() == name)
+            .ok_or_else(|| BakeError::UnknownClip {
+                name: name.to_string(),
+                available: names.clone(),
+            })
+    };
+    // Each group is the layers of one segment.
+    let groups: Vec<Vec<(&Clip, Option<&str>, f32)>> = if !req.layers.is_empty() {
+        if !req.clips.is_empty() {
+            return Err(BakeError::ClipsAndLayers);
+        }
+        vec![req
+            .layers
+            .iter()
+            .map(|l| Ok((find(&l.clip)?, l.mask.as_deref(), l.weight)))
+            .collect::<Result<_, BakeError>>()?]
+    } else if !req.clips.is_empty() {
+        req.clips
+            .iter()
+            .map(|c| Ok(vec![(find(c)?, None, 1.0)]))
+            .collect::<Result<_, BakeError>>()?
+    } else {
+        asset.clips.iter().map(|c| vec![(c, None, 1.0)]).collect()
+    };
+    let first = groups
+        .first()
+        .and_then(|g| g.first())
+        .ok_or(BakeError::NoClips)?
+        .0;
+    let fps = match req.fps {
+        Some(f) => check_fps(f, "")?,
+        None => check_fps(
+            first.sample_rate(),
+            " (the clip's own sample rate; give --fps)",
+        )?,
+    };
+    let mut segments = Vec::with_capacity(groups.len());
+    let mut total = 0usize;
+    for g in groups {
+        let mut layers = Vec::with_capacity(g.len());
+        for (clip, mask, weight) in g {
+            let mask = match mask {
+                Some(m) => Some(
+                    asset
+                        .mask(m)
+                        .ok_or_else(|| BakeError::UnknownMask {
+                            name: m.to_string(),
+                            available: asset.masks.iter().map(|m| m.name.clone()).collect(),
+                        })?
+                        .per_joint(skeleton),
+                ),
+                None => None,
+            };
+            layers.push(Resolved {
+                binding: ClipBinding::new(clip, skeleton),
+                clip,
+                mask,
+                weight,
+            });
+        }
+        let duration = layers.first().map_or(0.0, |l| l.clip.duration());
+        let n = frame_count(duration, fps);
+        segments.push(Segment {
+            layers,
+            first_frame: total,
+            frame_count: n,
+            duration,
+        });
+        total = total
+            .checked_add(n)
+            .filter(|&t| t <= MAX_FRAMES)
+            .ok_or(BakeError::TooManyFrames(total.saturating_add(n)))?;
+    }
+    let clips = segments
+        .iter()
+        .map(|s| ClipRange {
+            name: s
+                .layers
+                .iter()
+                .map(|l| l.clip.name())
+                .collect::<Vec<_>>()
+                .join("+"),
+            first_frame: s.first_frame,
+            frame_count: s.frame_count,
+            looping: s.layers.first().is_some_and(|l| l.clip.looping()),
+            duration: s.duration,
+        })
+        .collect();
+
+    // Frame jobs: (segment, frame within segment).
+    let jobs: Vec<(usize, usize)> = segments
+        .iter()
+        .enumerate()
+        .flat_map(|(si, s)| (0..s.frame_count).map(move |i| (si, i)))
+        .collect();
+    let nv = lod.vertex_count();
+    let with_normals = !lod.normals.is_empty();
+    let out_n = order.as_ref().map_or(nv, Vec::len);
+    let mut positions = vec![Vec3::ZERO; total * out_n];
+    let mut normals = vec![Vec3::ZERO; if with_normals { total * out_n } else { 0 }];
+    let normal_chunks: Vec<&mut [Vec3]> = if with_normals {
+        normals.chunks_mut(out_n.max(1)).collect()
+    } else {
+        (0..total).map(|_| &mut [][..]).collect()
+    };
+    positions
+        .par_chunks_mut(out_n.max(1))
+        .zip(normal_chunks.into_par_iter())
+        .zip(jobs.par_iter())
+        .try_for_each(|((pos, nor), &(si, i))| -> Result<(), BakeError> {
+            let s = &segments[si];
+            let t = frame_time(i, s.frame_count, s.duration, fps);
+            let mut scratch_p = vec![Vec3::ZERO; nv];
+            let mut scratch_n = vec![Vec3::ZERO; if with_normals { nv } else { 0 }];
+            let (p_out, n_out): (&mut [Vec3], &mut [Vec3]) = if order.is_some() {
+                (&mut scratch_p, &mut scratch_n)
+            } else {
+                (pos, nor)
+            };
+            skin_frame(skeleton, lod, &s.layers, t, p_out, n_out)?;
+            if let Some(order) = &order {
+                for (o, &v) in order.iter().enumerate() {
+                    pos[o] = scratch_p[v as usize];
+                    if with_normals {
+                        nor[o] = scratch_n[v as usize];
+                    }
+                }
+            }
+            Ok(())
+        })?;
+    let (bind_positions, indices) = match (&order, req.vertex_order) {
+        (Some(order), VertexOrder::Source) => {
+            let map = asset
+                .source_vertex(req.mesh)
+                .map(|m| &m.map[..])
+                .unwrap_or(&[]);
+            (
+                order.iter().map(|&v| lod.positions[v as usize]).collect(),
+                lod.indices
+                    .iter()
+                    .map(|&i| map.get(i as usize).copied().unwrap_or(0))
+                    .collect(),
+            )
+        }
+        _ => (lod.positions.clone(), lod.indices.clone()),
+    };
+    Ok(Baked {
+        frames: Frames {
+            vertex_count: out_n,
+            frame_count: total,
+            fps,
+            positions,
+            normals,
+        },
+        clips,
+        bind_positions,
+        indices,
+        mesh_name: mesh.name.clone(),
+    })
+}
+
+/// For source order, the LOD-0 vertex each source vertex takes its values from.
+fn output_order(
+    asset: &Asset,
+    req: &BakeRequest,
+    lod: &Lod,
+) -> Result<Option<Vec<u32>>, BakeError> {
+    if req.vertex_order == VertexOrder::Split {
+        return Ok(None);
+    }
+    if req.lod != 0 {
+        return Err(BakeError::SourceOrder(format!(
+            "only LOD 0 has a source vertex order (LOD {} was asked for)",
+            req.lod
+        )));
+    }
+    let map = asset.source_vertex(req.mesh).ok_or_else(|| {
+        BakeError::SourceOrder("the file has no source-vertex map for this mesh".into())
+    })?;
+    if map.map.len() != lod.vertex_count() {
+        return Err(BakeError::SourceOrder(
+            "the map does not match the mesh".into(),
+        ));
+    }
+    let mut first = vec![u32::MAX; map.source_vertex_count as usize];
+    for (v, &s) in map.map.iter().enumerate() {
+        if let Some(slot) = first.get_mut(s as usize) {
+            if *slot == u32::MAX {
+                *slot = v as u32;
+            }
+        }
+    }
+    if let Some(s) = first.iter().position(|&v| v == u32::MAX) {
+        return Err(BakeError::SourceOrder(format!(
+            "source vertex {s} is used by no triangle vertex, so it has no skinned position"
+        )));
+    }
+    Ok(Some(first))
+}
+
+/// Poses and skins one frame at clip time `t` with the runtime's functions.
+fn skin_frame(
+    skeleton: &sinew_core::Skeleton,
+    lod: &Lod,
+    layers: &[Resolved<'_>],
+    t: f32,
+    out_p: &mut [Vec3],
+    out_n: &mut [Vec3],
+) -> Result<(), BakeError> {
+    let bind = skeleton.bind_local();
+    let mut local = bind.to_vec();
+    let sample = |l: &Resolved<'_>| -> Result<Vec<Transform>, BakeError> {
+        let mut pose = if l.clip.additive() {
+            vec![Transform::IDENTITY; bind.len()]
+        } else {
+            bind.to_vec()
+        };
+        Sampler::new()
+            .sample(l.clip, &l.binding, skeleton, t, &mut pose)
+            .map_err(|source| BakeError::Clip {
+                clip: l.clip.name().to_string(),
+                source,
+            })?;
+        Ok(pose)
+    };
+    if let [only] = layers {
+        if only.mask.is_none() && only.weight == 1.0 && !only.clip.additive() {
+            // A single clip: what a game does when it plays one clip.
+            local = sample(only)?;
+        } else {
+            blend(skeleton, layers, &sample, &mut local)?;
+        }
+    } else {
+        blend(skeleton, layers, &sample, &mut local)?;
+    }
+    let mut models = vec![Mat4::IDENTITY; bind.len()];
+    local_to_model(skeleton.parents(), &local, &mut models)?;
+    let mut palette = vec![Mat4::IDENTITY; bind.len()];
+    skinning_palette(&models, skeleton.inverse_bind(), &mut palette)?;
+    skin_lod(&palette, lod, out_p, out_n)?;
+    Ok(())
+}
+
+fn blend(
+    skeleton: &sinew_core::Skeleton,
+    layers: &[Resolved<'_>],
+    sample: &dyn Fn(&Resolved<'_>) -> Result<Vec<Transform>, BakeError>,
+    out: &mut [Transform],
+) -> Result<(), BakeError> {
+    let poses = layers.iter().map(sample).collect::<Result<Vec<_>, _>>()?;
+    let mut buffers = BlendBuffers::new(skeleton.len());
+    buffers.reset();
+    for lp in layers
+        .iter()
+        .zip(&poses)
+        .filter(|(l, _)| !l.clip.additive())
+    {
+        buffers.accumulate(&layer(lp))?;
+    }
+    buffers.resolve(skeleton.bind_local(), out)?;
+    for lp in layers.iter().zip(&poses).filter(|(l, _)| l.clip.additive()) {
+        apply_additive(out, &layer(lp))?;
+    }
+    Ok(())
+}
+
+fn layer<'a>((l, p): (&'a Resolved<'_>, &'a Vec<Transform>)) -> Layer<'a> {
+    let x = Layer::new(p, l.binding.driven()).with_weight(l.weight);
+    match &l.mask {
+        Some(m) => x.with_mask(m),
+        None => x,
+    }
+}
+
+/// The mesh as Wavefront OBJ: `v` lines (bind-pose positions in the bake's vertex order) and `f` lines
+/// (1-based), nothing else, so that importers keep the vertex order.
+pub fn obj(baked: &Baked) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "# sinew bake: mesh {:?}, {} vertices in cache order\no {}\n",
+        baked.mesh_name,
+        baked.bind_positions.len(),
+        if baked.mesh_name.is_empty() {
+            "mesh"
+        } else {
+            &baked.mesh_name
+        }
+        .replace(char::is_whitespace, "_")
+    );
+    for p in &baked.bind_positions {
+        let _ = writeln!(s, "v {:?} {:?} {:?}", p.x, p.y, p.z);
+    }
+    for t in baked.indices.chunks_exact(3) {
+        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    s
+}

@@ -19,6 +19,7 @@
 
 use meshopt::{SimplifyOptions, SimplifyVertex};
 use sinew_core::glam;
+use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, Scene};
 use std::collections::HashSet;
@@ -186,35 +187,34 @@ fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam
             ..*b
         })
         .collect();
-    let mut model: Vec<glam::Mat4> = Vec::with_capacity(locals.len());
-    for (i, l) in locals.iter().enumerate() {
-        let m = match skeleton.parents()[i] {
-            Some(p) => model[p as usize] * l.to_mat4(),
-            None => l.to_mat4(),
-        };
-        model.push(m);
+    // The runtime's own local-to-model, palette and skinning, so the test poses deform exactly as a
+    // game would draw them. Joint indices were validated by the caller; on any error the vertices keep
+    // their bind positions (no displacement attribute).
+    let n = skeleton.len();
+    let (mut models, mut palette) = (vec![glam::Mat4::IDENTITY; n], vec![glam::Mat4::IDENTITY; n]);
+    let mut out = lod.positions.clone();
+    let posed = skinning::local_to_model_and_palette(
+        skeleton.parents(),
+        &locals,
+        skeleton.inverse_bind(),
+        &mut models,
+        &mut palette,
+    )
+    .and_then(|()| {
+        skinning::skin(
+            &palette,
+            &lod.positions,
+            &[],
+            &lod.joints,
+            &lod.weights,
+            &mut out,
+            &mut [],
+        )
+    });
+    if posed.is_err() {
+        out.clone_from(&lod.positions);
     }
-    let palette: Vec<glam::Mat4> = model
-        .iter()
-        .zip(skeleton.inverse_bind())
-        .map(|(m, ib)| *m * *ib)
-        .collect();
-    lod.positions
-        .iter()
-        .enumerate()
-        .map(|(v, p)| {
-            let mut out = glam::Vec3::ZERO;
-            for k in 0..MAX_INFLUENCES {
-                let w = lod.weights[v][k];
-                if w != 0.0 {
-                    if let Some(m) = palette.get(lod.joints[v][k] as usize) {
-                        out += m.transform_point3(*p) * w;
-                    }
-                }
-            }
-            out
-        })
-        .collect()
+    out
 }
 
 fn extent(positions: &[glam::Vec3]) -> f32 {

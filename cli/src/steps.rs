@@ -2,11 +2,12 @@
 //! each a thin layer over `sinew-pipeline` that adds the file name to errors and returns its part of
 //! the JSON report. Field names of the report structs are a stable interface (docs/cli.md).
 
-use crate::cli::{LodArgs, SplitOpts};
+use crate::cli::{CompressArgs, LodArgs, SplitOpts};
 use crate::commands::inspect::{diag_report, DiagnosticReport};
 use anyhow::{anyhow, bail, Context};
 use serde::Serialize;
 use sinew_core::Skeleton;
+use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::mapping::{self, JointSet, Mapping, MatchMethod, Side};
 use sinew_pipeline::retarget::{self, REST_DIFFERENCE_WARN_DEGREES};
@@ -492,4 +493,27 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
         }
     }
     Ok(())
+}
+
+/// The compression options of `--no-compress`, `--tolerance`, `--error-distance`; `None` for plain
+/// clips. Errors on a tolerance that is not a positive number or a negative distance.
+pub fn compress_options(args: &CompressArgs) -> anyhow::Result<Option<CompressOptions>> {
+    if args.no_compress {
+        return Ok(None);
+    }
+    if let Some(t) = args.tolerance {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--tolerance {t}: must be a positive number of model units");
+        }
+    }
+    if let Some(d) = args.error_distance {
+        if !(d.is_finite() && d >= 0.0) {
+            bail!("--error-distance {d}: must be a non-negative number of model units");
+        }
+    }
+    Ok(Some(CompressOptions {
+        tolerance: args.tolerance,
+        error_distance: args.error_distance,
+        ..CompressOptions::default()
+    }))
 }

@@ -140,6 +140,20 @@ pub struct SplitOpts {
     pub mask: Vec<String>,
 }
 
+/// Clip compression options shared by the commands that write `.sinew` (`convert`, `split`, `lod`).
+#[derive(Debug, Args, Clone, Default)]
+pub struct CompressArgs {
+    /// Store clips as plain f32 keys (no quantization, no key reduction).
+    #[arg(long, conflicts_with_all = ["tolerance", "error_distance"])]
+    pub no_compress: bool,
+    /// Largest allowed error, model units [default: 0.0005 x the skeleton's bind-pose extent].
+    #[arg(long, value_name = "T")]
+    pub tolerance: Option<f32>,
+    /// Distance of the error points from their joint, model units [default: 0.05 x the extent].
+    #[arg(long, value_name = "D")]
+    pub error_distance: Option<f32>,
+}
+
 /// `sinew convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
@@ -173,6 +187,9 @@ pub struct ConvertArgs {
     /// LOD generation.
     #[command(flatten)]
     pub lod: LodArgs,
+    /// Clip compression.
+    #[command(flatten)]
+    pub compress: CompressArgs,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
@@ -207,6 +224,9 @@ pub struct SplitArgs {
     /// Where to split.
     #[command(flatten)]
     pub split: SplitOpts,
+    /// Clip compression.
+    #[command(flatten)]
+    pub compress: CompressArgs,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
@@ -223,6 +243,9 @@ pub struct LodCmdArgs {
     /// LOD options.
     #[command(flatten)]
     pub lod: LodArgs,
+    /// Clip compression.
+    #[command(flatten)]
+    pub compress: CompressArgs,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,

@@ -2,11 +2,12 @@
 //! each a thin layer over `sinew-pipeline` that adds the file name to errors and returns its part of
 //! the JSON report. Field names of the report structs are a stable interface (docs/cli.md).
 
-use crate::cli::{LodArgs, SplitOpts};
+use crate::cli::{CompressArgs, LodArgs, SplitOpts};
 use crate::commands::inspect::{diag_report, DiagnosticReport};
 use anyhow::{anyhow, bail, Context};
 use serde::Serialize;
 use sinew_core::Skeleton;
+use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::mapping::{self, JointSet, Mapping, MatchMethod, Side};
 use sinew_pipeline::retarget::{self, REST_DIFFERENCE_WARN_DEGREES};
@@ -449,7 +450,47 @@ pub fn split(scene: &mut Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<
         }
     }
     scene.clips = out_clips;
+    add_masks(scene, &skel, plan, file)?;
     Ok(reports)
+}
+
+/// Adds the named joint masks of a split to the scene (weight 1 for each listed joint; joints not
+/// listed have weight 0), replacing masks of the same name: with `--at`, `upper` (the joints of the
+/// subtrees under the `--at` joints, the joints of the `CLIP.upper` clips) and `lower` (every other
+/// joint); each `--mask NAME=...` adds `NAME` with exactly the listed joints (the joints of
+/// `CLIP.NAME`). Joints are listed in skeleton order.
+pub fn add_masks(
+    scene: &mut Scene,
+    skel: &Skeleton,
+    plan: &SplitPlan,
+    file: &str,
+) -> anyhow::Result<()> {
+    let mut made: Vec<sinew_scene::Mask> = Vec::new();
+    let from_weights = |name: &str, weights: &[f32], keep: bool| sinew_scene::Mask {
+        name: name.to_string(),
+        weights: skel
+            .names()
+            .iter()
+            .zip(weights)
+            .filter(|(_, &w)| (w > 0.5) == keep)
+            .map(|(n, _)| (n.clone(), 1.0))
+            .collect(),
+    };
+    if !plan.at.is_empty() {
+        let upper =
+            split::mask_from_subtrees(skel, &plan.at).map_err(|e| anyhow!("{file}: {e}"))?;
+        made.push(from_weights(split::UPPER_SUFFIX, &upper, true));
+        made.push(from_weights(split::LOWER_SUFFIX, &upper, false));
+    }
+    for m in &plan.masks {
+        let w = split::mask_from_joints(skel, &m.joints).map_err(|e| anyhow!("{file}: {e}"))?;
+        made.push(from_weights(&m.name, &w, true));
+    }
+    for m in made {
+        scene.masks.retain(|old| old.name != m.name);
+        scene.masks.push(m);
+    }
+    Ok(())
 }
 
 /// Parses the LOD options; `None` for `--lod none`.
@@ -492,4 +533,27 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
         }
     }
     Ok(())
+}
+
+/// The compression options of `--no-compress`, `--tolerance`, `--error-distance`; `None` for plain
+/// clips. Errors on a tolerance that is not a positive number or a negative distance.
+pub fn compress_options(args: &CompressArgs) -> anyhow::Result<Option<CompressOptions>> {
+    if args.no_compress {
+        return Ok(None);
+    }
+    if let Some(t) = args.tolerance {
+        if !(t.is_finite() && t > 0.0) {
+            bail!("--tolerance {t}: must be a positive number of model units");
+        }
+    }
+    if let Some(d) = args.error_distance {
+        if !(d.is_finite() && d >= 0.0) {
+            bail!("--error-distance {d}: must be a non-negative number of model units");
+        }
+    }
+    Ok(Some(CompressOptions {
+        tolerance: args.tolerance,
+        error_distance: args.error_distance,
+        ..CompressOptions::default()
+    }))
 }

@@ -14,6 +14,8 @@ use crate::Status;
 use anyhow::{anyhow, bail};
 use rayon::prelude::*;
 use serde::Serialize;
+use sinew_pipeline::compile::{CompileOptions, CompileReport};
+use sinew_pipeline::compress::{ClipCompressionReport, CompressOptions};
 use sinew_pipeline::lod::LodOptions;
 use sinew_scene::Scene;
 use std::collections::HashMap;
@@ -101,16 +103,20 @@ pub struct ClipOut {
     pub keys: KeyCounts,
     /// Number of joints the clip drives.
     pub driven_joints: usize,
+    /// What compressing the clip reached; `null` with `--no-compress`.
+    pub compression: Option<ClipCompressionReport>,
 }
 
-/// Builds the details of an output from the final scene.
+/// Builds the details of an output from the final scene and what writing it reported.
 pub fn details(
     scene: &Scene,
-    bytes: u64,
+    written: Written,
     motions: Vec<MotionReport>,
     cuts: Vec<String>,
     splits: Vec<SplitReport>,
 ) -> OutputDetails {
+    let Written { bytes, report } = written;
+    let mut compression = report.clips.into_iter();
     OutputDetails {
         bytes,
         format: scene.source_format.name(),
@@ -140,6 +146,7 @@ pub fn details(
                     key_times: r.key_times,
                     keys: r.keys,
                     driven_joints: r.driven_joints.len(),
+                    compression: compression.next(),
                 }
             })
             .collect(),
@@ -150,12 +157,34 @@ pub fn details(
     }
 }
 
-/// Compiles a scene and writes it atomically; returns the byte count.
-pub fn write_scene(scene: &Scene, input: &str, output: &Path) -> anyhow::Result<u64> {
-    let bytes = sinew_pipeline::compile::compile_to_bytes(scene)
+/// What [`write_scene`] wrote.
+#[derive(Debug, Default)]
+pub struct Written {
+    /// Size of the file, bytes.
+    pub bytes: u64,
+    /// Per-clip compression figures (empty without compression).
+    pub report: CompileReport,
+}
+
+/// Compiles a scene (compressing its clips with `compress`, plain f32 clips for `None`) and writes it
+/// atomically.
+pub fn write_scene(
+    scene: &Scene,
+    input: &str,
+    output: &Path,
+    compress: Option<&CompressOptions>,
+) -> anyhow::Result<Written> {
+    let options = CompileOptions {
+        compress: compress.cloned(),
+    };
+    let (asset, report) = sinew_pipeline::compile::compile_with(scene, &options)
         .map_err(|e| anyhow!("{input}: compiling: {e}"))?;
+    let bytes = sinew_core::format::write(&asset).map_err(|e| anyhow!("{input}: writing: {e}"))?;
     write_atomic(output, &bytes)?;
-    Ok(bytes.len() as u64)
+    Ok(Written {
+        bytes: bytes.len() as u64,
+        report,
+    })
 }
 
 /// Everything prepared once for all inputs.
@@ -167,6 +196,7 @@ struct Plan {
     clips: Option<String>,
     split: SplitPlan,
     lod: Option<LodOptions>,
+    compress: Option<CompressOptions>,
 }
 
 fn convert_one(input: &Path, output: &Path, plan: &Plan) -> anyhow::Result<OutputDetails> {
@@ -189,8 +219,8 @@ fn convert_one(input: &Path, output: &Path, plan: &Plan) -> anyhow::Result<Outpu
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
     steps::lods(&mut scene, plan.lod.as_ref(), &label)?;
-    let bytes = write_scene(&scene, &label, output)?;
-    Ok(details(&scene, bytes, motions, cuts, splits))
+    let written = write_scene(&scene, &label, output, plan.compress.as_ref())?;
+    Ok(details(&scene, written, motions, cuts, splits))
 }
 
 /// Runs `sinew convert`.
@@ -198,6 +228,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     // Options first: anything wrong here is a usage error (exit 2) before any work.
     let lod = steps::lod_options(&args.lod)?;
     let split = SplitPlan::parse(&args.split)?;
+    let compress = steps::compress_options(&args.compress)?;
     if let Some(spec) = &args.clips {
         sinew_pipeline::cut::parse_cut_spec(spec).map_err(|e| anyhow!("--clips: {e}"))?;
     }
@@ -276,6 +307,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         clips: args.clips.clone(),
         split,
         lod,
+        compress,
     };
 
     // One input with -o: an error is the command's error (exit 2, one line).
@@ -443,9 +475,22 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         );
     }
     for c in &d.clips {
+        let compression = match &c.compression {
+            Some(r) if r.compressed => format!(
+                "; compressed {} -> {} bytes (ratio {:.1}), max error {} (p99 {}, tolerance {})",
+                r.raw_bytes,
+                r.compressed_bytes,
+                r.ratio,
+                sci(r.max_error),
+                sci(r.p99_error),
+                sci(r.tolerance)
+            ),
+            Some(_) => "; kept plain (compression did not make it smaller)".to_string(),
+            None => String::new(),
+        };
         let _ = writeln!(
             o,
-            "  clip \"{}\": {} s, {} keys, drives {} joints",
+            "  clip \"{}\": {} s, {} keys, drives {} joints{compression}",
             c.name,
             num(c.duration),
             c.keys.total,
@@ -485,4 +530,9 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         }
     }
     o
+}
+
+/// A small model-unit figure in scientific notation (`3.21e-4`).
+fn sci(x: f32) -> String {
+    format!("{x:.2e}")
 }

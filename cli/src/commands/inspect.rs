@@ -18,7 +18,18 @@ use std::path::Path;
 pub fn run(args: &InspectArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let scene = crate::input::import(&args.file, &args.import)?;
     let file_size = std::fs::metadata(&args.file).map(|m| m.len()).ok();
-    let report = build_report(&args.file, file_size, &scene);
+    let mut report = build_report(&args.file, file_size, &scene);
+    if scene.source_format == sinew_scene::SourceFormat::Sinew {
+        // The scene has the decoded curves; how each channel is stored comes from the asset itself.
+        // The import above already read and checked the file.
+        if let Ok(asset) = std::fs::read(&args.file)
+            .ok()
+            .and_then(|b| sinew_core::format::read(&b).ok())
+            .ok_or(())
+        {
+            add_encodings(&mut report, &asset.clips);
+        }
+    }
     if ctx.json {
         print_json(&report)?;
     } else if ctx.human() {
@@ -46,8 +57,127 @@ pub struct InspectReport {
     pub meshes: Vec<MeshReport>,
     /// Materials.
     pub materials: Vec<MaterialReport>,
+    /// Named joint masks (`.sinew` MASK section; empty for other formats).
+    pub masks: Vec<MaskReport>,
     /// Every diagnostic the importer raised, in order.
     pub diagnostics: Vec<DiagnosticReport>,
+}
+
+/// One named joint mask.
+#[derive(Debug, Serialize)]
+pub struct MaskReport {
+    /// Mask name.
+    pub name: String,
+    /// `{joint, weight}` pairs as stored; joints not listed have weight 0.
+    pub weights: Vec<MaskWeight>,
+}
+
+/// One joint of a mask.
+#[derive(Debug, Serialize)]
+pub struct MaskWeight {
+    /// Joint name.
+    pub joint: String,
+    /// Weight in [0, 1].
+    pub weight: f32,
+}
+
+/// How one channel of a track is stored in a `.sinew` file.
+#[derive(Debug, Serialize, Clone, PartialEq)]
+pub struct ChannelEncodingReport {
+    /// `bind` (not stored), `constant` (one f32 value), `f32` (plain values in every frame) or
+    /// `quantized`.
+    pub kind: &'static str,
+    /// Quantized only: per component, the smallest bit width over all segments.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_bits: Option<[u8; 3]>,
+    /// Quantized only: per component, the largest bit width over all segments.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_bits: Option<[u8; 3]>,
+}
+
+/// How the three channels of a track are stored.
+#[derive(Debug, Serialize, Clone, PartialEq)]
+pub struct TrackEncodingReport {
+    /// Translation.
+    pub translation: ChannelEncodingReport,
+    /// Rotation (quantized: the three smallest components).
+    pub rotation: ChannelEncodingReport,
+    /// Scale.
+    pub scale: ChannelEncodingReport,
+}
+
+/// Channel counts per encoding over a clip.
+#[derive(Debug, Serialize, Default, Clone, PartialEq)]
+pub struct EncodingCounts {
+    /// Whether the clip is stored compressed.
+    pub compressed: bool,
+    /// Channels not stored (bind value).
+    pub bind: usize,
+    /// Channels stored as one value.
+    pub constant: usize,
+    /// Channels stored as plain f32 frames.
+    pub f32: usize,
+    /// Channels stored quantized.
+    pub quantized: usize,
+    /// Smallest bit width of any quantized component (0 without quantized channels).
+    pub min_bits: u8,
+    /// Largest bit width of any quantized component (0 without quantized channels).
+    pub max_bits: u8,
+}
+
+fn channel_encoding(e: sinew_core::ChannelEncoding) -> ChannelEncodingReport {
+    use sinew_core::ChannelEncoding as E;
+    let (kind, min_bits, max_bits) = match e {
+        E::Bind => ("bind", None, None),
+        E::Constant => ("constant", None, None),
+        E::F32 => ("f32", None, None),
+        E::Quantized { min_bits, max_bits } => ("quantized", Some(min_bits), Some(max_bits)),
+    };
+    ChannelEncodingReport {
+        kind,
+        min_bits,
+        max_bits,
+    }
+}
+
+/// Fills the per-track `encoding` and per-clip `encodings` of a `.sinew` file's report from its stored
+/// clips (same order as the imported scene's clips and tracks).
+pub fn add_encodings(report: &mut InspectReport, clips: &[sinew_core::Clip]) {
+    for (c, clip) in report.clips.iter_mut().zip(clips) {
+        let mut counts = EncodingCounts {
+            compressed: clip.is_compressed(),
+            min_bits: u8::MAX,
+            ..Default::default()
+        };
+        for (i, t) in c.tracks.iter_mut().enumerate() {
+            let Some(e) = clip.channel_encodings(i) else {
+                continue;
+            };
+            let e = e.map(channel_encoding);
+            for ch in &e {
+                match ch.kind {
+                    "bind" => counts.bind += 1,
+                    "constant" => counts.constant += 1,
+                    "f32" => counts.f32 += 1,
+                    _ => counts.quantized += 1,
+                }
+                if let (Some(lo), Some(hi)) = (ch.min_bits, ch.max_bits) {
+                    counts.min_bits = counts.min_bits.min(lo.into_iter().min().unwrap_or(0));
+                    counts.max_bits = counts.max_bits.max(hi.into_iter().max().unwrap_or(0));
+                }
+            }
+            let [translation, rotation, scale] = e;
+            t.encoding = Some(TrackEncodingReport {
+                translation,
+                rotation,
+                scale,
+            });
+        }
+        if counts.quantized == 0 {
+            counts.min_bits = 0;
+        }
+        c.encodings = Some(counts);
+    }
 }
 
 /// Totals.
@@ -133,6 +263,8 @@ pub struct ClipReport {
     pub unmatched_joints: Option<Vec<String>>,
     /// Per-track key counts.
     pub tracks: Vec<TrackReport>,
+    /// `.sinew` input: channel counts per storage encoding; `null` for other formats.
+    pub encodings: Option<EncodingCounts>,
 }
 
 /// Key counts by channel.
@@ -159,6 +291,8 @@ pub struct TrackReport {
     pub rotation_keys: usize,
     /// Scale keys.
     pub scale_keys: usize,
+    /// `.sinew` input: how each channel is stored; `null` for other formats.
+    pub encoding: Option<TrackEncodingReport>,
 }
 
 /// One mesh.
@@ -301,6 +435,21 @@ pub fn build_report(path: &Path, file_size: Option<u64>, scene: &Scene) -> Inspe
         clips,
         meshes,
         materials,
+        masks: scene
+            .masks
+            .iter()
+            .map(|m| MaskReport {
+                name: m.name.clone(),
+                weights: m
+                    .weights
+                    .iter()
+                    .map(|(joint, weight)| MaskWeight {
+                        joint: joint.clone(),
+                        weight: *weight,
+                    })
+                    .collect(),
+            })
+            .collect(),
         diagnostics,
     }
 }
@@ -380,6 +529,7 @@ pub(crate) fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton
             translation_keys: nt,
             rotation_keys: nr,
             scale_keys: ns,
+            encoding: None,
         });
     }
     keys.total = keys.translation + keys.rotation + keys.scale;
@@ -403,6 +553,7 @@ pub(crate) fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton
         driven_joints: driven,
         unmatched_joints: unmatched,
         tracks,
+        encodings: None,
     }
 }
 
@@ -597,6 +748,22 @@ pub fn human(r: &InspectReport) -> String {
             c.driven_joints.len(),
             c.driven_joints.join(", ")
         );
+        if let Some(e) = &c.encodings {
+            let bits = if e.quantized > 0 {
+                format!(" ({}-{} bits)", e.min_bits, e.max_bits)
+            } else {
+                String::new()
+            };
+            let _ = writeln!(
+                o,
+                "    stored {}: {} quantized{bits}, {} f32, {} constant, {} bind channels",
+                if e.compressed { "compressed" } else { "plain" },
+                e.quantized,
+                e.f32,
+                e.constant,
+                e.bind
+            );
+        }
         match &c.unmatched_joints {
             None => {
                 let _ = writeln!(
@@ -679,6 +846,13 @@ pub fn human(r: &InspectReport) -> String {
                 m.name,
                 nums(&m.base_color)
             );
+        }
+    }
+
+    if !r.masks.is_empty() {
+        let _ = writeln!(o, "masks: {}", r.masks.len());
+        for m in &r.masks {
+            let _ = writeln!(o, "  \"{}\": {} joints", m.name, m.weights.len());
         }
     }
 

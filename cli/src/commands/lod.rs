@@ -10,12 +10,13 @@ use crate::Status;
 /// Runs `sinew lod`.
 pub fn run(args: &LodCmdArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let options = steps::lod_options(&args.lod)?;
+    let compress = steps::compress_options(&args.compress)?;
     check_output_path(&args.output)?;
     let label = args.file.display().to_string();
     let mut scene = crate::input::import(&args.file, &args.import)?;
     steps::lods(&mut scene, options.as_ref(), &label)?;
-    let bytes = write_scene(&scene, &label, &args.output)?;
-    let d = details(&scene, bytes, Vec::new(), Vec::new(), Vec::new());
+    let written = write_scene(&scene, &label, &args.output, compress.as_ref())?;
+    let d = details(&scene, written, Vec::new(), Vec::new(), Vec::new());
     emit_one(&label, &args.output, d, ctx)?;
     Ok(Status::Success)
 }

@@ -14,6 +14,7 @@ pub fn run(args: &SplitArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if plan.is_empty() {
         bail!("split: give at least one --at JOINT or --mask NAME=JOINT,...");
     }
+    let compress = steps::compress_options(&args.compress)?;
     check_output_path(&args.output)?;
     let label = args.file.display().to_string();
     let mut scene = crate::input::import(&args.file, &args.import)?;
@@ -22,8 +23,8 @@ pub fn run(args: &SplitArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         bail!("{label}: holds no clip to split");
     }
     let splits = steps::split(&mut scene, &plan, &label)?;
-    let bytes = write_scene(&scene, &label, &args.output)?;
-    let d = details(&scene, bytes, Vec::new(), Vec::new(), splits);
+    let written = write_scene(&scene, &label, &args.output, compress.as_ref())?;
+    let d = details(&scene, written, Vec::new(), Vec::new(), splits);
     emit_one(&label, &args.output, d, ctx)?;
     Ok(Status::Success)
 }

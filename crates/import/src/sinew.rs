@@ -8,6 +8,7 @@
 //! - per clip, one curve per stored channel: an animated channel gets a key at every stored key time
 //!   with the stored frame value; a constant channel one key at time 0; a bind channel no keys. Values
 //!   are copied, never interpolated, so compiling the scene again gives the same key times and frames.
+//!   A compressed clip is decoded first; its curves hold the decoded values at its kept key times.
 
 use crate::{ImportError, ImportOptions, Resolver};
 use sinew_core::format::{self, Asset, FormatError};
@@ -88,8 +89,16 @@ pub fn scene_from_asset(asset: Asset) -> Scene {
     scene
 }
 
-/// A clip's stored channels as curves with keys at the stored key times.
+/// A clip's stored channels as curves with keys at the stored key times. A compressed clip is
+/// decoded first ([`Clip::to_plain`]): its curves get the decoded values at its kept key times.
 fn scene_clip(clip: &Clip) -> SceneClip {
+    let plain;
+    let clip = if clip.is_compressed() {
+        plain = clip.to_plain();
+        &plain
+    } else {
+        clip
+    };
     let times = clip.times();
     let stride = clip.stride();
     let frames = clip.frames();
@@ -142,7 +151,7 @@ mod tests {
     use super::*;
     use crate::Location;
     use sinew_core::format::{LodInfo, Material as FormatMaterial};
-    use sinew_core::{JointDesc, Lod, Skeleton, Submesh, Transform};
+    use sinew_core::{ClipBinding, JointDesc, Lod, Sampler, Skeleton, Submesh, Transform};
 
     fn no_files(_: &str) -> std::io::Result<Vec<u8>> {
         Err(std::io::ErrorKind::NotFound.into())
@@ -287,6 +296,82 @@ mod tests {
         )
         .unwrap();
         assert_eq!(again, clip());
+    }
+
+    /// A walking arm: 61 keys of a smooth rotation and translation, enough for compression to pay.
+    fn animated_scene() -> Scene {
+        let mut scene = Scene::new(SourceFormat::Gltf);
+        scene.skeleton = asset().skeleton;
+        let times: Vec<f32> = (0..61).map(|k| k as f32 / 30.0).collect();
+        let rot = times
+            .iter()
+            .map(|t| Quat::from_rotation_z((t * 3.0).sin() * 0.8))
+            .collect();
+        let pos = times
+            .iter()
+            .map(|t| Vec3::new(1.0, (t * 2.0).cos() * 0.3, 0.0))
+            .collect();
+        scene.clips.push(SceneClip {
+            name: "walk".into(),
+            duration: 2.0,
+            sample_rate: 30.0,
+            // Not looping: a looping clip sampled at its duration wraps to time 0.
+            looping: false,
+            additive: false,
+            tracks: vec![
+                TrackCurves {
+                    joint: "arm".into(),
+                    rotation: Curve::new(times.clone(), rot),
+                    ..Default::default()
+                },
+                TrackCurves {
+                    joint: "hand".into(),
+                    translation: Curve::new(times, pos),
+                    ..Default::default()
+                },
+            ],
+        });
+        scene
+    }
+
+    #[test]
+    fn compressed_clips_import_as_their_decoded_values() {
+        let scene = animated_scene();
+        let (compiled, report) =
+            sinew_pipeline::compile::compile_with(&scene, &Default::default()).unwrap();
+        let stored = &compiled.clips[0];
+        assert!(stored.is_compressed() && report.clips[0].compressed);
+        assert!(stored.frames().is_empty());
+        let bytes = format::write(&compiled).unwrap();
+        let s = import("c.sinew", &bytes, &no_files, &ImportOptions::default()).unwrap();
+        let c = &s.clips[0];
+        assert_eq!((c.name.as_str(), c.duration), ("walk", 2.0));
+        let skeleton = s.skeleton.as_ref().unwrap();
+        let binding = ClipBinding::new(stored, skeleton);
+        let mut pose = vec![Transform::IDENTITY; skeleton.len()];
+        let (arm, hand) = (&c.tracks[0], &c.tracks[1]);
+        assert_eq!(arm.rotation.times, stored.times());
+        assert_eq!(hand.translation.times, stored.times());
+        assert!(arm.translation.is_empty() && hand.rotation.is_empty());
+        for (k, &t) in stored.times().iter().enumerate() {
+            // The decoded clip sampled at its own key time is the stored (dequantized) key.
+            Sampler::new()
+                .sample(stored, &binding, skeleton, t, &mut pose)
+                .unwrap();
+            let r = arm.rotation.values[k];
+            assert!(
+                r.dot(pose[0].rotation).abs() > 1.0 - 1e-6,
+                "t {t}: {r} vs {}",
+                pose[0].rotation
+            );
+            let p = hand.translation.values[k];
+            assert!(p.distance(pose[1].translation) < 1e-5, "t {t}: {p}");
+            // And it is the source animation within the tolerance, not zeros.
+            assert!((r.length() - 1.0).abs() < 1e-3);
+            let source = Quat::from_rotation_z((t * 3.0).sin() * 0.8);
+            assert!(r.angle_between(source) < 0.01, "t {t}");
+            assert!(p.distance(Vec3::new(1.0, (t * 2.0).cos() * 0.3, 0.0)) < 0.01);
+        }
     }
 
     #[test]

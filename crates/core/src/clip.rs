@@ -592,6 +592,26 @@ impl Clip {
         }
     }
 
+    /// Where an animated channel's values start in a frame the sampler reads: the plain frame offset, or
+    /// for a compressed clip the offset inside a decoded key (see [`Quantized::decode_into`]).
+    fn frame_offset(&self, o: u32) -> usize {
+        match &self.quantized {
+            None => o as usize,
+            Some(q) => q
+                .group_dest
+                .get(o as usize / 3)
+                .map_or(usize::MAX / 2, |&d| d as usize),
+        }
+    }
+
+    /// Floats per frame the sampler reads (plain stride, or a decoded key's size).
+    fn frame_stride(&self) -> usize {
+        match &self.quantized {
+            None => self.stride,
+            Some(q) => q.decoded_stride,
+        }
+    }
+
     /// Maps a playback time to the clip's own time, per the looping rule.
     #[inline]
     pub fn local_time(&self, t: f32) -> f32 {
@@ -612,12 +632,33 @@ impl Clip {
 }
 
 /// A clip bound to a skeleton: for each track, the joint it drives. Made once, reused every frame.
+///
+/// Besides the joint of each track it holds the sampler's work lists: per channel kind (translation,
+/// rotation, scale) and source (bind value, constant, animated), the driven joints with their constant
+/// or their offset in a (decoded) frame, so the per-frame loops need no matching on channels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClipBinding {
     joint_of_track: Vec<Option<JointIndex>>,
     unmatched: Vec<String>,
     driven: Vec<JointIndex>,
     skeleton_len: usize,
+    /// Floats per frame of the layout the offsets below point into.
+    frame_stride: usize,
+    work: Work,
+}
+
+/// The sampler's per-binding work lists (joint indices as usize, offsets into a frame).
+#[derive(Debug, Clone, PartialEq, Default)]
+struct Work {
+    bind_t: Vec<usize>,
+    bind_r: Vec<usize>,
+    bind_s: Vec<usize>,
+    const_t: Vec<(usize, Vec3)>,
+    const_r: Vec<(usize, Quat)>,
+    const_s: Vec<(usize, Vec3)>,
+    anim_t: Vec<(usize, usize)>,
+    anim_r: Vec<(usize, usize)>,
+    anim_s: Vec<(usize, usize)>,
 }
 
 impl ClipBinding {
@@ -626,10 +667,29 @@ impl ClipBinding {
         let mut joint_of_track = Vec::with_capacity(clip.tracks.len());
         let mut unmatched = Vec::new();
         let mut driven = Vec::new();
+        let mut w = Work::default();
         for t in &clip.tracks {
             let j = skeleton.find(&t.joint);
             match j {
-                Some(j) => driven.push(j),
+                Some(j) => {
+                    driven.push(j);
+                    let ju = j as usize;
+                    match t.translation {
+                        Channel::Bind => w.bind_t.push(ju),
+                        Channel::Constant(v) => w.const_t.push((ju, v)),
+                        Channel::Animated(o) => w.anim_t.push((ju, clip.frame_offset(o))),
+                    }
+                    match t.rotation {
+                        Channel::Bind => w.bind_r.push(ju),
+                        Channel::Constant(q) => w.const_r.push((ju, q)),
+                        Channel::Animated(o) => w.anim_r.push((ju, clip.frame_offset(o))),
+                    }
+                    match t.scale {
+                        Channel::Bind => w.bind_s.push(ju),
+                        Channel::Constant(v) => w.const_s.push((ju, v)),
+                        Channel::Animated(o) => w.anim_s.push((ju, clip.frame_offset(o))),
+                    }
+                }
                 None => unmatched.push(t.joint.clone()),
             }
             joint_of_track.push(j);
@@ -640,6 +700,8 @@ impl ClipBinding {
             unmatched,
             driven,
             skeleton_len: skeleton.len(),
+            frame_stride: clip.frame_stride(),
+            work: w,
         }
     }
     /// The clip's track names that matched no joint.
@@ -657,10 +719,58 @@ impl ClipBinding {
 }
 
 /// Per-character sampling state: a cursor into a clip's key times so that playing forward never searches
-/// from the first key.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// from the first key, and for compressed clips the two most recently used keys decoded to f32 (made on
+/// first use for a clip and reused, so playing forward decodes a key only when the cursor passes it).
+#[derive(Debug, Clone, Default)]
 pub struct Sampler {
     cursor: usize,
+    cache: KeyCache,
+}
+
+/// Equality compares the cursor only: the decoded-key cache is a memo that never changes results.
+impl PartialEq for Sampler {
+    fn eq(&self, other: &Self) -> bool {
+        self.cursor == other.cursor
+    }
+}
+impl Eq for Sampler {}
+
+/// Two decoded keys of one compressed clip.
+#[derive(Debug, Clone, Default)]
+struct KeyCache {
+    /// [`Quantized::id`] of the clip the frames belong to; 0 = none.
+    id: u64,
+    /// The key held by each slot (`usize::MAX` = empty).
+    keys: [usize; 2],
+    /// Two decoded keys of `decoded_stride` floats each.
+    frames: Vec<f32>,
+}
+
+impl KeyCache {
+    /// The slots holding keys `k0` and `k1`, decoding whichever is missing.
+    fn slots(&mut self, q: &Quantized, k0: usize, k1: usize) -> (usize, usize) {
+        let stride = q.decoded_stride;
+        if self.id != q.id || self.frames.len() != 2 * stride {
+            self.id = q.id;
+            self.keys = [usize::MAX; 2];
+            self.frames.clear();
+            self.frames.resize(2 * stride, 0.0);
+        }
+        let find = |k: usize| self.keys.iter().position(|&x| x == k);
+        let (s0, s1) = match (find(k0), find(k1)) {
+            (Some(a), Some(b)) => return (a, b),
+            (Some(a), None) => (a, 1 - a),
+            (None, Some(b)) => (1 - b, b),
+            (None, None) => (0, if k0 == k1 { 0 } else { 1 }),
+        };
+        for (slot, k) in [(s0, k0), (s1, k1)] {
+            if self.keys[slot] != k {
+                q.decode_into(k, &mut self.frames[slot * stride..(slot + 1) * stride]);
+                self.keys[slot] = k;
+            }
+        }
+        (s0, s1)
+    }
 }
 
 impl Sampler {
@@ -737,111 +847,131 @@ impl Sampler {
         {
             return Err(ClipError::BindingMismatch);
         }
+        if binding.frame_stride != clip.frame_stride() {
+            return Err(ClipError::BindingMismatch);
+        }
         let t = clip.local_time(t);
         let (k0, k1, a) = self.locate(clip, t);
-        if let Some(q) = &clip.quantized {
-            sample_quantized(clip, q, binding, skeleton, (k0, k1, a), out);
-            return Ok(());
-        }
-        let s = clip.stride;
-        let f0 = &clip.frames[k0 * s..(k0 + 1) * s];
-        let f1 = &clip.frames[k1 * s..(k1 + 1) * s];
         let bind = skeleton.bind_local();
-        for (track, joint) in clip.tracks.iter().zip(&binding.joint_of_track) {
-            let Some(j) = *joint else { continue };
-            let j = j as usize;
-            let default = if clip.additive {
-                Transform::IDENTITY
-            } else {
-                bind[j]
-            };
-            let translation = match track.translation {
-                Channel::Bind => default.translation,
-                Channel::Constant(v) => v,
-                Channel::Animated(o) => lerp3(f0, f1, o as usize, a),
-            };
-            let rotation = match track.rotation {
-                Channel::Bind => default.rotation,
-                Channel::Constant(q) => q,
-                Channel::Animated(o) => {
-                    let o = o as usize;
-                    let q0 = Quat::from_xyzw(f0[o], f0[o + 1], f0[o + 2], f0[o + 3]);
-                    if a == 0.0 {
-                        q0
-                    } else {
-                        let q1 = Quat::from_xyzw(f1[o], f1[o + 1], f1[o + 2], f1[o + 3]);
-                        nlerp(q0, q1, a)
-                    }
-                }
-            };
-            let scale = match track.scale {
-                Channel::Bind => default.scale,
-                Channel::Constant(v) => v,
-                Channel::Animated(o) => lerp3(f0, f1, o as usize, a),
-            };
-            out[j] = Transform {
-                translation,
-                rotation,
-                scale,
-            };
-        }
+        let (f0, f1) = match &clip.quantized {
+            None => {
+                let s = clip.stride;
+                (
+                    &clip.frames[k0 * s..(k0 + 1) * s],
+                    &clip.frames[k1 * s..(k1 + 1) * s],
+                )
+            }
+            Some(q) => {
+                let (s0, s1) = self.cache.slots(q, k0, k1);
+                let s = q.decoded_stride;
+                let frames = &self.cache.frames;
+                (&frames[s0 * s..(s0 + 1) * s], &frames[s1 * s..(s1 + 1) * s])
+            }
+        };
+        sample_frames(
+            &binding.work,
+            clip.additive,
+            clip.quantized.is_some(),
+            bind,
+            (f0, f1, a),
+            out,
+        );
         Ok(())
     }
 }
 
-/// The compressed counterpart of the plain loop in [`Sampler::sample`] (same rules, quantized source).
-fn sample_quantized(
-    clip: &Clip,
-    q: &Quantized,
-    binding: &ClipBinding,
-    skeleton: &Skeleton,
-    (k0, k1, a): (usize, usize, f32),
+/// The per-frame loops: bind and constant channels first, then each animated channel kind over its
+/// offsets. `raw_rotations`: the frames hold unnormalised rotations (decoded compressed keys), which
+/// are normalised also at `a == 0`.
+fn sample_frames(
+    w: &Work,
+    additive: bool,
+    raw_rotations: bool,
+    bind: &[Transform],
+    (f0, f1, a): (&[f32], &[f32], f32),
     out: &mut [Transform],
 ) {
-    let f0 = q.key(k0);
-    let f1 = q.key(k1);
-    let exact = a == 0.0;
-    let bind = skeleton.bind_local();
-    for (track, joint) in clip.tracks.iter().zip(&binding.joint_of_track) {
-        let Some(j) = *joint else { continue };
-        let j = j as usize;
-        let default = if clip.additive {
-            Transform::IDENTITY
-        } else {
-            bind.get(j).copied().unwrap_or(Transform::IDENTITY)
-        };
-        let vec = |c: Channel<Vec3>, d: Vec3| match c {
-            Channel::Bind => d,
-            Channel::Constant(v) => v,
-            Channel::Animated(o) => {
-                let v0 = f0.vec3(o as usize);
-                if exact {
-                    v0
-                } else {
-                    v0.lerp(f1.vec3(o as usize), a)
-                }
+    if additive {
+        for &j in &w.bind_t {
+            if let Some(o) = out.get_mut(j) {
+                o.translation = Vec3::ZERO;
             }
-        };
-        let translation = vec(track.translation, default.translation);
-        let rotation = match track.rotation {
-            Channel::Bind => default.rotation,
-            Channel::Constant(r) => r,
-            Channel::Animated(o) => {
-                let q0 = f0.quat_raw(o as usize);
-                if exact {
-                    q0.normalize()
-                } else {
-                    nlerp(q0, f1.quat_raw(o as usize), a)
-                }
+        }
+        for &j in &w.bind_r {
+            if let Some(o) = out.get_mut(j) {
+                o.rotation = Quat::IDENTITY;
             }
-        };
-        let scale = vec(track.scale, default.scale);
-        if let Some(slot) = out.get_mut(j) {
-            *slot = Transform {
-                translation,
-                rotation,
-                scale,
-            };
+        }
+        for &j in &w.bind_s {
+            if let Some(o) = out.get_mut(j) {
+                o.scale = Vec3::ONE;
+            }
+        }
+    } else {
+        for &j in &w.bind_t {
+            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
+                o.translation = b.translation;
+            }
+        }
+        for &j in &w.bind_r {
+            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
+                o.rotation = b.rotation;
+            }
+        }
+        for &j in &w.bind_s {
+            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
+                o.scale = b.scale;
+            }
+        }
+    }
+    for &(j, v) in &w.const_t {
+        if let Some(o) = out.get_mut(j) {
+            o.translation = v;
+        }
+    }
+    for &(j, q) in &w.const_r {
+        if let Some(o) = out.get_mut(j) {
+            o.rotation = q;
+        }
+    }
+    for &(j, v) in &w.const_s {
+        if let Some(o) = out.get_mut(j) {
+            o.scale = v;
+        }
+    }
+    let vec3 = |f: &[f32], o: usize| f.get(o..o + 3).map(Vec3::from_slice);
+    let quat = |f: &[f32], o: usize| f.get(o..o + 4).map(Quat::from_slice);
+    if a == 0.0 {
+        for &(j, o) in &w.anim_t {
+            if let (Some(slot), Some(v)) = (out.get_mut(j), vec3(f0, o)) {
+                slot.translation = v;
+            }
+        }
+        for &(j, o) in &w.anim_s {
+            if let (Some(slot), Some(v)) = (out.get_mut(j), vec3(f0, o)) {
+                slot.scale = v;
+            }
+        }
+        for &(j, o) in &w.anim_r {
+            if let (Some(slot), Some(q)) = (out.get_mut(j), quat(f0, o)) {
+                slot.rotation = if raw_rotations { q.normalize() } else { q };
+            }
+        }
+    } else {
+        for &(j, o) in &w.anim_t {
+            if let (Some(slot), Some(v0), Some(v1)) = (out.get_mut(j), vec3(f0, o), vec3(f1, o)) {
+                slot.translation = v0.lerp(v1, a);
+            }
+        }
+        for &(j, o) in &w.anim_s {
+            if let (Some(slot), Some(v0), Some(v1)) = (out.get_mut(j), vec3(f0, o), vec3(f1, o)) {
+                slot.scale = v0.lerp(v1, a);
+            }
+        }
+        for &(j, o) in &w.anim_r {
+            if let (Some(slot), Some(q0), Some(q1)) = (out.get_mut(j), quat(f0, o), quat(f1, o)) {
+                slot.rotation = nlerp(q0, q1, a);
+            }
         }
     }
 }
@@ -881,19 +1011,10 @@ pub(crate) fn rotation_starts(tracks: &[Track]) -> Result<Vec<bool>, String> {
     Ok(starts)
 }
 
-#[inline]
-fn lerp3(f0: &[f32], f1: &[f32], o: usize, a: f32) -> Vec3 {
-    let v0 = Vec3::new(f0[o], f0[o + 1], f0[o + 2]);
-    if a == 0.0 {
-        v0
-    } else {
-        v0.lerp(Vec3::new(f1[o], f1[o + 1], f1[o + 2]), a)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::compressed::SegmentComponent;
     use crate::skeleton::JointDesc;
 
     fn skeleton() -> Skeleton {
@@ -1083,5 +1204,218 @@ mod tests {
             bad(Curve::new(vec![0.0], vec![])),
             Err(ClipError::LengthMismatch(_))
         ));
+    }
+
+    /// The sampler as it was before the work lists and the key cache, kept as the reference the new
+    /// loops must match bit for bit.
+    fn reference(clip: &Clip, b: &ClipBinding, sk: &Skeleton, t: f32, out: &mut [Transform]) {
+        let t = clip.local_time(t);
+        let (k0, k1, a) = Sampler::new().locate(clip, t);
+        let bind = sk.bind_local();
+        let lerp3 = |f0: &[f32], f1: &[f32], o: usize| {
+            let v0 = Vec3::new(f0[o], f0[o + 1], f0[o + 2]);
+            if a == 0.0 {
+                v0
+            } else {
+                v0.lerp(Vec3::new(f1[o], f1[o + 1], f1[o + 2]), a)
+            }
+        };
+        for (track, joint) in clip.tracks.iter().zip(&b.joint_of_track) {
+            let Some(j) = *joint else { continue };
+            let j = j as usize;
+            let d = if clip.additive {
+                Transform::IDENTITY
+            } else {
+                bind[j]
+            };
+            if let Some(q) = &clip.quantized {
+                let (f0, f1) = (q.key(k0), q.key(k1));
+                let v = |c: Channel<Vec3>, d: Vec3| match c {
+                    Channel::Bind => d,
+                    Channel::Constant(v) => v,
+                    Channel::Animated(o) if a == 0.0 => f0.vec3(o as usize),
+                    Channel::Animated(o) => f0.vec3(o as usize).lerp(f1.vec3(o as usize), a),
+                };
+                out[j] = Transform {
+                    translation: v(track.translation, d.translation),
+                    rotation: match track.rotation {
+                        Channel::Bind => d.rotation,
+                        Channel::Constant(r) => r,
+                        Channel::Animated(o) if a == 0.0 => f0.quat_raw(o as usize).normalize(),
+                        Channel::Animated(o) => {
+                            nlerp(f0.quat_raw(o as usize), f1.quat_raw(o as usize), a)
+                        }
+                    },
+                    scale: v(track.scale, d.scale),
+                };
+                continue;
+            }
+            let s = clip.stride;
+            let (f0, f1) = (
+                &clip.frames[k0 * s..(k0 + 1) * s],
+                &clip.frames[k1 * s..(k1 + 1) * s],
+            );
+            let v = |c: Channel<Vec3>, d: Vec3| match c {
+                Channel::Bind => d,
+                Channel::Constant(v) => v,
+                Channel::Animated(o) => lerp3(f0, f1, o as usize),
+            };
+            out[j] = Transform {
+                translation: v(track.translation, d.translation),
+                rotation: match track.rotation {
+                    Channel::Bind => d.rotation,
+                    Channel::Constant(r) => r,
+                    Channel::Animated(o) => {
+                        let o = o as usize;
+                        let q0 = Quat::from_slice(&f0[o..o + 4]);
+                        if a == 0.0 {
+                            q0
+                        } else {
+                            nlerp(q0, Quat::from_slice(&f1[o..o + 4]), a)
+                        }
+                    }
+                },
+                scale: v(track.scale, d.scale),
+            };
+        }
+    }
+
+    fn bits(p: &[Transform]) -> Vec<u32> {
+        p.iter()
+            .flat_map(|t| {
+                let mut v = t.translation.to_array().to_vec();
+                v.extend(t.rotation.to_array());
+                v.extend(t.scale.to_array());
+                v
+            })
+            .map(f32::to_bits)
+            .collect()
+    }
+
+    /// A compressed clip built by hand: root translation (3 components), arm rotation (3) and arm scale
+    /// (3), 5 keys in segments of 2, pseudo-random quantized values.
+    fn compressed(looping: bool, additive: bool) -> Clip {
+        let tracks = vec![
+            Track {
+                joint: "root".into(),
+                translation: Channel::Animated(0),
+                rotation: Channel::Constant(Quat::from_rotation_y(0.3)),
+                scale: Channel::Bind,
+            },
+            Track {
+                joint: "arm".into(),
+                translation: Channel::Bind,
+                rotation: Channel::Animated(3),
+                scale: Channel::Animated(6),
+            },
+            Track {
+                joint: "tail".into(),
+                translation: Channel::Animated(9),
+                rotation: Channel::Bind,
+                scale: Channel::Bind,
+            },
+        ];
+        let starts = rotation_starts(&tracks).unwrap();
+        let keys = 5;
+        let comps = starts.len();
+        let segs: Vec<SegmentComponent> = (0..3 * comps)
+            .map(|i| SegmentComponent {
+                bits: [0, 3, 7, 12, 16][i % 5],
+                min: (i * 13 % 40) as u8,
+                extent: 200,
+            })
+            .collect();
+        let mut x = 0x9e37_79b9u32;
+        let mut q = Vec::new();
+        for k in 0..keys {
+            for c in 0..comps {
+                x ^= x << 13;
+                x ^= x >> 17;
+                x ^= x << 5;
+                let bits = segs[(k / 2) * comps + c].bits;
+                q.push(if bits == 0 { 0 } else { x % (1 << bits) });
+            }
+        }
+        let index = [0u8, 3, 1, 2, 3];
+        let data = crate::compressed::pack(keys, 2, &segs, &starts, &q, &index);
+        let mut ranges = vec![[-0.5f32, 1.0]; comps];
+        ranges[0] = [-3.0, 7.5];
+        Clip::from_quantized(
+            "c".into(),
+            if looping { 1.25 } else { 1.0 },
+            4.0,
+            looping,
+            additive,
+            vec![0.0, 0.25, 0.5, 0.75, 1.0],
+            tracks,
+            QuantizedParts {
+                segment_len: 2,
+                ranges,
+                segments: segs,
+                data,
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn work_lists_and_key_cache_match_the_reference_bit_for_bit() {
+        let sk = skeleton();
+        let mut clips = vec![walk(false), walk(true)];
+        for (l, a) in [(false, false), (true, false), (false, true)] {
+            let c = compressed(l, a);
+            clips.push(c.to_plain());
+            clips.push(c);
+        }
+        // Forward at 60 Hz past the end, keys exactly, backwards, jumps and negative times.
+        let mut times: Vec<f32> = (0..100).map(|i| i as f32 / 60.0).collect();
+        times.extend([
+            0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 0.9, 0.1, -0.3, 2.6, 0.5, 0.5, 7.0,
+        ]);
+        times.extend((0..40).map(|i| 1.5 - i as f32 / 30.0));
+        for clip in &clips {
+            let b = ClipBinding::new(clip, &sk);
+            let mut sampler = Sampler::new();
+            for &t in &times {
+                let marker = Transform::from_translation(Vec3::splat(9.0));
+                let mut got = vec![marker; sk.len()];
+                let mut want = vec![marker; sk.len()];
+                sampler.sample(clip, &b, &sk, t, &mut got).unwrap();
+                reference(clip, &b, &sk, t, &mut want);
+                assert_eq!(bits(&got), bits(&want), "{} at {t}", clip.name());
+            }
+        }
+        // At a key time the stored value comes back exactly (compressed: the decoded key, normalised).
+        let c = compressed(false, false);
+        let q = c.quantized.as_deref().unwrap();
+        let mut out = vec![Transform::IDENTITY; sk.len()];
+        Sampler::new()
+            .sample(&c, &ClipBinding::new(&c, &sk), &sk, 0.5, &mut out)
+            .unwrap();
+        assert_eq!(out[0].translation, q.key(2).vec3(0));
+        assert_eq!(out[1].rotation, q.key(2).quat(3));
+        assert_eq!(out[1].scale, q.key(2).vec3(6));
+    }
+
+    #[test]
+    fn key_cache_decodes_only_when_the_cursor_passes_a_key() {
+        let c = compressed(false, false);
+        let sk = skeleton();
+        let b = ClipBinding::new(&c, &sk);
+        let mut out = vec![Transform::IDENTITY; sk.len()];
+        let mut s = Sampler::new();
+        s.sample(&c, &b, &sk, 0.1, &mut out).unwrap();
+        assert_eq!(s.cache.keys, [0, 1]);
+        s.sample(&c, &b, &sk, 0.3, &mut out).unwrap();
+        // Key 1 stays in its slot; key 2 replaces key 0.
+        assert_eq!(s.cache.keys, [2, 1]);
+        let q = c.quantized.as_deref().unwrap();
+        assert_eq!(s.cache.id, q.id);
+        // Another clip (same layout, new payload) invalidates the cache.
+        let other = compressed(false, false);
+        s.sample(&other, &ClipBinding::new(&other, &sk), &sk, 0.3, &mut out)
+            .unwrap();
+        assert_ne!(s.cache.id, q.id);
+        assert_eq!(s.cache.keys, [1, 2]);
     }
 }

@@ -59,10 +59,20 @@ pub(crate) struct Dec {
 }
 
 /// A validated compressed payload with precomputed decode tables.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub(crate) struct Quantized {
     pub(crate) parts: QuantizedParts,
     pub(crate) components: usize,
+    /// Process-unique identity of this payload (clones share it: same data), so that a
+    /// [`crate::Sampler`]'s decoded-key cache knows when the clip changed. Not part of equality.
+    pub(crate) id: u64,
+    /// Floats per decoded key: 3 per translation or scale, 4 per rotation (raw x y z w), in component
+    /// order (the layout [`crate::Clip::to_plain`] gives its frames).
+    pub(crate) decoded_stride: usize,
+    /// Per group of three components (one channel): where its values start in a decoded key.
+    pub(crate) group_dest: Vec<u32>,
+    /// Per group: true when the channel is a rotation.
+    group_rot: Vec<bool>,
     /// Per segment: first bit of its data, bits per key record.
     seg: Vec<(usize, usize)>,
     /// Per segment, per component.
@@ -70,6 +80,16 @@ pub(crate) struct Quantized {
     /// `parts.data` followed by 8 zero bytes, so that every read is one unaligned 8-byte load.
     padded: Vec<u8>,
 }
+
+impl PartialEq for Quantized {
+    fn eq(&self, other: &Self) -> bool {
+        // Everything else is derived from the parts and the layout.
+        self.parts == other.parts && self.group_rot == other.group_rot
+    }
+}
+
+/// Source of [`Quantized::id`]; 0 is never handed out.
+static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 /// The scale and bias a component decodes with: `value = bias + scale * q`.
 pub fn dequant_params(range: [f32; 2], seg: SegmentComponent) -> (f32, f32) {
@@ -263,7 +283,20 @@ impl Quantized {
         }
         let mut padded = parts.data.clone();
         padded.extend_from_slice(&[0; 8]);
+        let mut group_dest = Vec::with_capacity(comps / 3);
+        let mut group_rot = Vec::with_capacity(comps / 3);
+        let mut decoded_stride = 0usize;
+        for first in (0..comps).step_by(3) {
+            let rot = rotation_starts.get(first).copied().unwrap_or(false);
+            group_dest.push(decoded_stride as u32);
+            group_rot.push(rot);
+            decoded_stride += if rot { 4 } else { 3 };
+        }
         Ok(Quantized {
+            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            decoded_stride,
+            group_dest,
+            group_rot,
             components: comps,
             seg,
             dec,
@@ -286,6 +319,23 @@ impl Quantized {
             data: &self.padded,
             base: start + (k - s * seg_len) * record,
             dec,
+        }
+    }
+
+    /// Decodes key `k` into `out` (at least [`Quantized::decoded_stride`] floats): per channel, the
+    /// values [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give, bit for bit.
+    pub(crate) fn decode_into(&self, k: usize, out: &mut [f32]) {
+        let key = self.key(k);
+        for (g, (&dest, &rot)) in self.group_dest.iter().zip(&self.group_rot).enumerate() {
+            let c = g * 3;
+            let d = dest as usize;
+            if rot {
+                if let Some(slot) = out.get_mut(d..d + 4) {
+                    slot.copy_from_slice(&key.quat_raw(c).to_array());
+                }
+            } else if let Some(slot) = out.get_mut(d..d + 3) {
+                slot.copy_from_slice(&key.vec3(c).to_array());
+            }
         }
     }
 

@@ -119,9 +119,9 @@ fn segments_offset(c: &Clip) -> usize {
 }
 
 #[test]
-fn compressed_clip_round_trips_and_header_says_1_1() {
+fn compressed_clip_round_trips_and_header_says_1_2() {
     let (bytes, c) = compressed_file();
-    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 1);
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 2);
     let back = format::read(&bytes).unwrap();
     assert_eq!(back.clips[0], c);
     let rec = clip_record_offset(&bytes);

@@ -22,12 +22,22 @@ pub fn run(args: &InspectArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if scene.source_format == sinew_scene::SourceFormat::Sinew {
         // The scene has the decoded curves; how each channel is stored comes from the asset itself.
         // The import above already read and checked the file.
-        if let Ok(asset) = std::fs::read(&args.file)
-            .ok()
-            .and_then(|b| sinew_core::format::read(&b).ok())
-            .ok_or(())
-        {
-            add_encodings(&mut report, &asset.clips);
+        if let Ok(bytes) = std::fs::read(&args.file) {
+            if let Ok(asset) = sinew_core::format::read(&bytes) {
+                add_encodings(&mut report, &asset.clips);
+            }
+            if let Ok(sections) = sinew_core::format::sections(&bytes) {
+                report.sections = sections
+                    .iter()
+                    .map(|s| SectionReport {
+                        tag: String::from_utf8_lossy(&s.tag.0).into_owned(),
+                        offset: s.offset,
+                        size: s.size,
+                        checksum_ok: s.checksum_ok,
+                        known: s.known,
+                    })
+                    .collect();
+            }
         }
     }
     if ctx.json {
@@ -59,8 +69,25 @@ pub struct InspectReport {
     pub materials: Vec<MaterialReport>,
     /// Named joint masks (`.sinew` MASK section; empty for other formats).
     pub masks: Vec<MaskReport>,
+    /// Sizes by section of a `.sinew` file, in file order (empty for other formats).
+    pub sections: Vec<SectionReport>,
     /// Every diagnostic the importer raised, in order.
     pub diagnostics: Vec<DiagnosticReport>,
+}
+
+/// One section of a `.sinew` file.
+#[derive(Debug, Serialize)]
+pub struct SectionReport {
+    /// Four-character tag (`STRS`, `SKEL`, `MESH`, `CLIP`, `SRCV`, `MASK`, or unknown).
+    pub tag: String,
+    /// Byte offset from the start of the file.
+    pub offset: u64,
+    /// Size in bytes (padding not included).
+    pub size: u64,
+    /// Whether the bytes match the stored CRC-32.
+    pub checksum_ok: bool,
+    /// Whether this version of sinew knows the tag (unknown sections are skipped).
+    pub known: bool,
 }
 
 /// One named joint mask.
@@ -435,6 +462,7 @@ pub fn build_report(path: &Path, file_size: Option<u64>, scene: &Scene) -> Inspe
         clips,
         meshes,
         materials,
+        sections: Vec::new(),
         masks: scene
             .masks
             .iter()
@@ -853,6 +881,20 @@ pub fn human(r: &InspectReport) -> String {
         let _ = writeln!(o, "masks: {}", r.masks.len());
         for m in &r.masks {
             let _ = writeln!(o, "  \"{}\": {} joints", m.name, m.weights.len());
+        }
+    }
+
+    if !r.sections.is_empty() {
+        let _ = writeln!(o, "sections (bytes):");
+        for s in &r.sections {
+            let _ = writeln!(
+                o,
+                "  {} {:>9} at {}{}",
+                s.tag,
+                s.size,
+                s.offset,
+                if s.known { "" } else { " (unknown, skipped)" }
+            );
         }
     }
 

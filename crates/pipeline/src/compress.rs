@@ -1065,6 +1065,9 @@ struct Ctx<'a> {
     src_rot: Vec<Vec<Quat>>,
     /// Per joint: the largest error allowed.
     limits: Vec<f32>,
+    /// Every scale of the source poses is positive and uniform, so that model-space rotations are
+    /// the products of the local rotations (what chain compensation relies on).
+    uniform: bool,
 }
 
 impl<'a> Ctx<'a> {
@@ -1085,6 +1088,10 @@ impl<'a> Ctx<'a> {
             })
             .collect();
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
+        let uniform = poses.iter().flatten().all(|t| {
+            let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
+            lo > 0.0 && hi <= lo * (1.0 + 1e-4)
+        });
         Ctx {
             rig,
             like,
@@ -1092,6 +1099,7 @@ impl<'a> Ctx<'a> {
             src,
             src_rot,
             limits,
+            uniform,
         }
     }
 }
@@ -1643,7 +1651,8 @@ fn segment_candidates(n: usize) -> Vec<usize> {
 /// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) and every segment length
 /// of [`segment_candidates`] is quantized with its first bit widths; the [`DESCENDED`] smallest of
 /// those (one for clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result
-/// is kept (the first of equals). `compensate`: quantize rotations with chain compensation.
+/// is kept (the first of equals). `compensate`: quantize rotations with chain compensation (only
+/// when every scale of the source poses is positive and uniform).
 fn compress_work(
     work: &mut Work,
     source: &Clip,
@@ -1658,6 +1667,7 @@ fn compress_work(
     }
     let times = source.times();
     let ctx = Ctx::new(rig, source, times, tolerance);
+    let compensate = compensate && ctx.uniform;
     let src = &ctx.src;
     simplify_channels(
         work,
@@ -1763,18 +1773,23 @@ pub fn compress_clip(
         .filter(|t| t.is_finite() && *t >= 0.0)
         .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
     let rig = Rig::new(&source, skeleton, distance);
-    let mut work = Work::from_plain(&source);
+    let work = Work::from_plain(&source);
     let mut best: Option<Clip> = None;
     if let Some(rig) = rig {
-        best = compress_work(
-            &mut work,
-            &source,
-            &rig,
-            tolerance,
-            skeleton.is_some(),
-            options,
-            true,
-        );
+        for compensate in [true, false] {
+            best = compress_work(
+                &mut work.clone(),
+                &source,
+                &rig,
+                tolerance,
+                skeleton.is_some(),
+                options,
+                compensate,
+            );
+            if best.is_some() {
+                break;
+            }
+        }
     }
     let plain_bytes = clip_record_size(&source);
     let mut out = best.unwrap_or_else(|| source.clone());
@@ -1889,6 +1904,35 @@ mod tests {
         }
         let (a, b) = (clip_record_size(&with), clip_record_size(&without));
         assert!(a < b, "compensated {a} B, uncompensated {b} B");
+    }
+
+    #[test]
+    fn mirrored_and_stretched_joints_stay_within_the_tolerance() {
+        // Chain compensation assumes model rotations are products of local rotations; a mirrored
+        // or non-uniformly scaled joint breaks that, and the clip must still compress correctly.
+        for scale in [Vec3::new(-1.0, 1.0, 1.0), Vec3::new(1.0, 2.5, 0.7)] {
+            let joints = (0..6)
+                .map(|i: usize| JointDesc {
+                    name: format!("j{i}"),
+                    parent: i.checked_sub(1).map(|p| format!("j{p}")),
+                    bind_local: Transform {
+                        translation: Vec3::Y * if i == 0 { 0.0 } else { 0.3 },
+                        rotation: Quat::IDENTITY,
+                        scale: if i == 2 { scale } else { Vec3::ONE },
+                    },
+                    inverse_bind: None,
+                })
+                .collect();
+            let skeleton = Skeleton::from_unordered(joints).unwrap().0;
+            let clip = swing(&skeleton, 45);
+            let (c, r) = compress_clip(&clip, Some(&skeleton), &CompressOptions::peers());
+            assert!(c.is_compressed(), "{scale}: {r:?}");
+            let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+                .into_iter()
+                .fold(0.0f32, f32::max);
+            assert!(worst <= 0.001, "{scale}: error {worst}");
+            assert!(r.compressed_bytes < r.plain_bytes, "{scale}: {r:?}");
+        }
     }
 
     #[test]

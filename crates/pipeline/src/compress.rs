@@ -24,7 +24,9 @@
 //!    component is range-reduced over the clip and over segments of keys. Rotations are quantized
 //!    with *chain compensation*: parents first, each joint storing the local rotation that, under its
 //!    parent's quantized rotation, gives its source model-space rotation, so orientation errors do not
-//!    accumulate down the chain.
+//!    accumulate down the chain (when every scale of the source poses is positive and uniform, so that
+//!    model-space rotations are products of local ones; otherwise, or if nothing meets the limits
+//!    with it, without compensation).
 //! 4. Bit widths, per component and segment: first the largest uniform error budget whose a-priori
 //!    widths measure within the limits, then one bit at a time off each component of each segment
 //!    for as long as the measured error (kept up to date incrementally) stays within the limits.

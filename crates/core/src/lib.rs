@@ -20,6 +20,7 @@ pub mod format;
 pub mod mesh;
 pub mod skeleton;
 pub mod skinning;
+mod soa;
 pub mod transform;
 
 pub use animator::{Animator, AnimatorError, ClipId};

@@ -65,6 +65,8 @@ pub struct Skeleton {
     bind_local: Vec<Transform>,
     inverse_bind: Vec<Mat4>,
     by_name: HashMap<String, JointIndex>,
+    /// `bind_local` as blocks of four joints (see [`crate::soa`]), for the blend.
+    bind_blocks: Vec<glam::Vec4>,
 }
 
 impl Skeleton {
@@ -184,12 +186,18 @@ impl Skeleton {
             }
         }
         Ok(Skeleton {
+            bind_blocks: crate::soa::from_transforms(&bind_local),
             names,
             parents,
             bind_local,
             inverse_bind,
             by_name,
         })
+    }
+
+    /// The bind pose as blocks of four joints.
+    pub(crate) fn bind_blocks(&self) -> &[glam::Vec4] {
+        &self.bind_blocks
     }
 
     /// Number of joints.

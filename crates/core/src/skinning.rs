@@ -10,7 +10,7 @@
 //! the offending one; all other errors are reported before anything is written.
 
 use crate::skeleton::JointIndex;
-use crate::{Lod, Transform, MAX_INFLUENCES};
+use crate::{soa, Lod, Transform, MAX_INFLUENCES};
 use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
 
 /// Why a skinning step was refused.
@@ -107,6 +107,67 @@ pub fn local_to_model_and_palette(
     Ok(())
 }
 
+/// [`local_to_model_and_palette`] reading the local pose from blocks of four joints (see
+/// [`crate::soa`]; joint `i` is lane `i % 4` of block `i / 4`). Same arithmetic, same bits.
+pub(crate) fn local_to_model_and_palette_blocks(
+    parents: &[Option<JointIndex>],
+    blocks: &[Vec4],
+    inverse_bind: &[Mat4],
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) -> Result<(), SkinError> {
+    let n = parents.len();
+    same_len(
+        "local blocks",
+        soa::block_count(n) * soa::COMPONENTS,
+        blocks.len(),
+    )?;
+    same_len("models", n, models.len())?;
+    same_len("inverse bind matrices", n, inverse_bind.len())?;
+    same_len("palette", n, palette.len())?;
+    check_parents(parents)?;
+    let (inverse_bind, palette) = (&inverse_bind[..n], &mut palette[..n]);
+    for (b, block) in blocks.chunks_exact(soa::COMPONENTS).enumerate() {
+        let Ok(block) = <&[Vec4; soa::COMPONENTS]>::try_from(block) else {
+            continue;
+        };
+        let i = b * 4;
+        // One copy of the joint step per lane, so that each lane's broadcasts are fixed shuffles.
+        if i < n {
+            joint_from_lane::<0>(i, block, parents, inverse_bind, models, palette);
+        }
+        if i + 1 < n {
+            joint_from_lane::<1>(i + 1, block, parents, inverse_bind, models, palette);
+        }
+        if i + 2 < n {
+            joint_from_lane::<2>(i + 2, block, parents, inverse_bind, models, palette);
+        }
+        if i + 3 < n {
+            joint_from_lane::<3>(i + 3, block, parents, inverse_bind, models, palette);
+        }
+    }
+    Ok(())
+}
+
+/// Joint `i`'s model matrix and palette entry, its local transform in lane `L` of `block`.
+#[inline(always)]
+fn joint_from_lane<const L: usize>(
+    i: usize,
+    block: &[Vec4; soa::COMPONENTS],
+    parents: &[Option<JointIndex>],
+    inverse_bind: &[Mat4],
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) {
+    let local = Splats::lane::<L>(block);
+    let m = match parents[i] {
+        Some(p) => mul_srt_splats(&models[p as usize], &local),
+        None => mul_srt_splats(&Mat4::IDENTITY, &local),
+    };
+    models[i] = m;
+    palette[i] = mul_affine(&m, &inverse_bind[i]);
+}
+
 fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
     for (i, p) in parents.iter().enumerate() {
         if let Some(p) = *p {
@@ -139,25 +200,62 @@ fn model_of(parents: &[Option<JointIndex>], models: &[Mat4], i: usize, local: &T
 #[inline(always)]
 fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
     let q = Vec4::from(local.rotation);
-    let (x, y, z, w) = (q.xxxx(), q.yyyy(), q.zzzz(), q.wwww());
+    let (t, s) = (local.translation, local.scale);
+    mul_srt_splats(
+        parent,
+        &Splats {
+            q: [q.xxxx(), q.yyyy(), q.zzzz(), q.wwww()],
+            t: [Vec4::splat(t.x), Vec4::splat(t.y), Vec4::splat(t.z)],
+            s: [Vec4::splat(s.x), Vec4::splat(s.y), Vec4::splat(s.z)],
+        },
+    )
+}
+
+/// A local transform with every component broadcast to four lanes.
+struct Splats {
+    q: [Vec4; 4],
+    t: [Vec4; 3],
+    s: [Vec4; 3],
+}
+
+impl Splats {
+    /// Lane `L` of a block of four joints.
+    #[inline(always)]
+    fn lane<const L: usize>(block: &[Vec4; soa::COMPONENTS]) -> Splats {
+        let v = |c: usize| {
+            let v = block[c];
+            match L {
+                0 => v.xxxx(),
+                1 => v.yyyy(),
+                2 => v.zzzz(),
+                _ => v.wwww(),
+            }
+        };
+        Splats {
+            q: [v(soa::R), v(soa::R + 1), v(soa::R + 2), v(soa::R + 3)],
+            t: [v(soa::T), v(soa::T + 1), v(soa::T + 2)],
+            s: [v(soa::S), v(soa::S + 1), v(soa::S + 2)],
+        }
+    }
+}
+
+/// [`mul_srt`] on broadcast components.
+#[inline(always)]
+fn mul_srt_splats(parent: &Mat4, local: &Splats) -> Mat4 {
+    let [x, y, z, w] = local.q;
     let (x2, y2, z2) = (x + x, y + y, z + z);
     let (xx, xy, xz) = (x * x2, x * y2, x * z2);
     let (yy, yz, zz) = (y * y2, y * z2, z * z2);
     let (wx, wy, wz) = (w * x2, w * y2, w * z2);
     let one = Vec4::ONE;
     let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
-    let s = local.scale;
-    let t = local.translation;
+    let [sx, sy, sz] = local.s;
+    let [tx, ty, tz] = local.t;
     // Column i of R is (r0i, r1i, r2i).
     let c0 = px * (one - (yy + zz)) + py * (xy + wz) + pz * (xz - wy);
     let c1 = px * (xy - wz) + py * (one - (xx + zz)) + pz * (yz + wx);
     let c2 = px * (xz + wy) + py * (yz - wx) + pz * (one - (xx + yy));
-    Mat4::from_cols(
-        c0 * s.x,
-        c1 * s.y,
-        c2 * s.z,
-        px * t.x + py * t.y + pz * t.z + pw,
-    )
+    Mat4::from_cols(c0 * sx, c1 * sy, c2 * sz, px * tx + py * ty + pz * tz + pw)
 }
 
 /// The skinning palette: `palette[i] = models[i] * inverse_bind[i]`, which moves a bind-pose

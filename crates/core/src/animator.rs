@@ -23,6 +23,7 @@
 
 use crate::blend::{apply_additive, BlendError, Layer};
 use crate::clip::{ClipBinding, ClipError, Sampler};
+use crate::cpu::multiversion;
 use crate::skinning::{self, SkinError};
 use crate::soa;
 use crate::{Clip, Skeleton, Transform};
@@ -126,6 +127,8 @@ pub struct Animator {
     locals: Vec<Transform>,
     /// An additive layer's sampled differences, one per joint.
     differences: Vec<Transform>,
+    /// Local matrices for [`Animator::evaluate_palette`].
+    local_matrices: Vec<f32>,
 }
 
 impl Animator {
@@ -140,6 +143,7 @@ impl Animator {
             local: vec![Vec4::ZERO; soa::block_count(n) * soa::COMPONENTS],
             locals: skeleton_bind(&skeleton),
             differences: vec![Transform::IDENTITY; n],
+            local_matrices: vec![0.0; soa::block_count(n) * 48],
             skeleton,
         }
     }
@@ -510,8 +514,10 @@ impl Animator {
         self.blend_normal_layers()?;
         skinning::local_to_model_and_palette_blocks(
             skeleton.parents(),
+            skeleton.level_order(),
             &self.local,
             skeleton.inverse_bind(),
+            &mut self.local_matrices,
             models,
             palette,
         )?;
@@ -520,26 +526,12 @@ impl Animator {
 
     /// Samples the active normal layers and blends them into `self.local` (blocks).
     fn blend_normal_layers(&mut self) -> Result<(), AnimatorError> {
-        let skeleton = &*self.skeleton;
-        self.accum.fill(Vec4::ZERO);
-        for s in self.slots.iter_mut() {
-            let w = s.weight * s.fade.factor();
-            if !s.active || s.clip.additive() || w.is_nan() || w <= 0.0 {
-                continue;
-            }
-            let binding = s.masked.as_ref().unwrap_or(&s.binding);
-            s.sampler
-                .sample_blocks(&s.clip, binding, s.time, &mut s.blocks)?;
-            soa::accumulate(
-                &mut self.accum,
-                binding.plan(),
-                &s.blocks,
-                w,
-                s.mask_blocks.as_deref(),
-            );
-        }
-        soa::resolve(&self.accum, skeleton.bind_blocks(), &mut self.local);
-        Ok(())
+        blend_layers(
+            &mut self.slots,
+            self.skeleton.bind_blocks(),
+            &mut self.accum,
+            &mut self.local,
+        )
     }
 
     /// Applies the active additive layers, in the order their clips were added, to `out`.
@@ -572,6 +564,45 @@ impl Animator {
         }
         Ok(())
     }
+}
+
+multiversion! {
+    /// Samples the active normal layers of `slots` and blends them into `local` (blocks), with `bind`
+    /// (blocks) where their weights fall short.
+    fn blend_layers(
+        slots: &mut [Slot],
+        bind: &[Vec4],
+        accum: &mut [Vec4],
+        local: &mut [Vec4],
+    ) -> Result<(), AnimatorError> => blend_layers_generic;
+}
+
+#[inline(always)]
+fn blend_layers_generic(
+    slots: &mut [Slot],
+    bind: &[Vec4],
+    accum: &mut [Vec4],
+    local: &mut [Vec4],
+) -> Result<(), AnimatorError> {
+    accum.fill(Vec4::ZERO);
+    for s in slots.iter_mut() {
+        let w = s.weight * s.fade.factor();
+        if !s.active || s.clip.additive() || w.is_nan() || w <= 0.0 {
+            continue;
+        }
+        let binding = s.masked.as_ref().unwrap_or(&s.binding);
+        s.sampler
+            .sample_blocks(&s.clip, binding, s.time, &mut s.blocks)?;
+        soa::accumulate(
+            accum,
+            binding.plan(),
+            &s.blocks,
+            w,
+            s.mask_blocks.as_deref(),
+        );
+    }
+    soa::resolve(accum, bind, local);
+    Ok(())
 }
 
 fn skeleton_bind(skeleton: &Skeleton) -> Vec<Transform> {

@@ -1106,6 +1106,7 @@ impl Sampler {
     /// Samples the clip at playback time `t` into `out`, one block of [`soa::COMPONENTS`] vectors per
     /// block of the binding's plan (`out` is resized to that). Lanes of joints the clip does not drive
     /// hold unspecified finite values.
+    #[inline(always)]
     pub(crate) fn sample_blocks(
         &mut self,
         clip: &Clip,

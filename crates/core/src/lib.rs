@@ -16,6 +16,7 @@ pub mod animator;
 pub mod blend;
 pub mod clip;
 pub mod compressed;
+mod cpu;
 pub mod format;
 pub mod mesh;
 pub mod skeleton;

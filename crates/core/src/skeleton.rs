@@ -67,6 +67,8 @@ pub struct Skeleton {
     by_name: HashMap<String, JointIndex>,
     /// `bind_local` as blocks of four joints (see [`crate::soa`]), for the blend.
     bind_blocks: Vec<glam::Vec4>,
+    /// [`crate::skinning::level_order`] of `parents`.
+    level_order: Vec<JointIndex>,
 }
 
 impl Skeleton {
@@ -187,12 +189,18 @@ impl Skeleton {
         }
         Ok(Skeleton {
             bind_blocks: crate::soa::from_transforms(&bind_local),
+            level_order: crate::skinning::level_order(&parents),
             names,
             parents,
             bind_local,
             inverse_bind,
             by_name,
         })
+    }
+
+    /// The joints level by level (see [`crate::skinning::level_order`]).
+    pub(crate) fn level_order(&self) -> &[JointIndex] {
+        &self.level_order
     }
 
     /// The bind pose as blocks of four joints.

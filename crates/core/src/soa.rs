@@ -84,6 +84,33 @@ pub(crate) fn rotation(block: &Block) -> [Vec4; 4] {
     [block[R], block[R + 1], block[R + 2], block[R + 3]]
 }
 
+/// One block holding up to four transforms (lanes past the end are the identity).
+#[inline(always)]
+pub(crate) fn block_of(four: &[Transform]) -> Block {
+    let t = |l: usize| four.get(l).copied().unwrap_or(Transform::IDENTITY);
+    let (a, b, c, d) = (t(0), t(1), t(2), t(3));
+    let v3 = |v: glam::Vec3| v.extend(0.0);
+    let tr = glam::Mat4::from_cols(
+        v3(a.translation),
+        v3(b.translation),
+        v3(c.translation),
+        v3(d.translation),
+    )
+    .transpose();
+    let r = glam::Mat4::from_cols(
+        a.rotation.into(),
+        b.rotation.into(),
+        c.rotation.into(),
+        d.rotation.into(),
+    )
+    .transpose();
+    let s = glam::Mat4::from_cols(v3(a.scale), v3(b.scale), v3(c.scale), v3(d.scale)).transpose();
+    [
+        tr.x_axis, tr.y_axis, tr.z_axis, r.x_axis, r.y_axis, r.z_axis, r.w_axis, s.x_axis,
+        s.y_axis, s.z_axis,
+    ]
+}
+
 /// Blocks holding `transforms` (lanes past the end are the identity).
 pub(crate) fn from_transforms(transforms: &[Transform]) -> Vec<Vec4> {
     let mut out = vec![Vec4::ZERO; block_count(transforms.len()) * COMPONENTS];
@@ -185,7 +212,7 @@ impl PlanBlock {
 ///
 /// Per lane this is [`crate::Sampler::sample`]'s arithmetic: `Vec3::lerp` for translation and scale,
 /// [`crate::clip::nlerp`] for rotation, a copy at `a == 0` and for values that are not animated.
-#[inline]
+#[inline(always)]
 pub(crate) fn sample_block(
     plan: &PlanBlock,
     c0: &[Vec4],
@@ -255,6 +282,7 @@ const W: usize = 10;
 /// Adds one normal layer's sampled blocks to the accumulators (see [`crate::blend`] for the
 /// arithmetic, which this follows lane for lane). `pose[i]` is the sampled block of `plan[i]`;
 /// `mask` holds one block of per-joint factors per skeleton block.
+#[inline(always)]
 pub(crate) fn accumulate(
     accum: &mut [Vec4],
     plan: &[PlanBlock],
@@ -295,6 +323,7 @@ pub(crate) fn accumulate(
 /// Writes the blend of the accumulated layers into `out` (one block per skeleton block), filling with
 /// the bind pose (`bind`, blocks) where the total weight is below 1: [`crate::BlendBuffers::resolve`]
 /// lane for lane.
+#[inline(always)]
 pub(crate) fn resolve(accum: &[Vec4], bind: &[Vec4], out: &mut [Vec4]) {
     let blocks = accum
         .chunks_exact(ACCUM)

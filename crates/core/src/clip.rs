@@ -32,8 +32,8 @@ use crate::Transform;
 use glam::{Quat, Vec3};
 
 /// Zero floats kept after the last frame (of a clip, or of a sampler's decoded keys), so that the
-/// sampler can load any 3-float channel as four floats.
-const FRAME_PAD: usize = 1;
+/// sampler can load any channel's floats four at a time.
+const FRAME_PAD: usize = 3;
 
 /// A keyed curve: strictly increasing times with one value each, linearly interpolated.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -396,7 +396,7 @@ impl Clip {
             }
         }
         let mut frames = frames;
-        frames.push(0.0); // FRAME_PAD
+        frames.extend([0.0; FRAME_PAD]);
         Ok(Clip {
             name,
             duration,
@@ -681,9 +681,75 @@ pub struct ClipBinding {
     /// `(offset in a frame, float index in the plan's blocks)` for every animated component of a
     /// driven joint, by offset.
     gather: Vec<(u32, u32)>,
-    /// `gather` grouped by destination vector, the form the sampler loads keys with.
+    /// `gather` as the sampler loads keys: whole blocks by transposition where every driven joint of
+    /// the block has the same animated channels, single vectors elsewhere.
+    blocks: Vec<GatherBlock>,
     vectors: Vec<GatherVector>,
     id: Identity,
+}
+
+/// A block of a key slot loaded by transposition: lane `l`'s animated floats are contiguous in a frame
+/// from `base[l]` (lanes of joints the clip does not drive borrow a driven lane's), and float `k` of
+/// every lane goes to block component `components[k]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct GatherBlock {
+    /// Vector index of the block's first component inside a slot.
+    first: u32,
+    base: [u32; 4],
+    components: [u8; soa::COMPONENTS],
+    floats: u8,
+}
+
+/// Splits `gather` into whole blocks that load by transposition and the remaining vectors.
+fn gather_plan(plan: &[PlanBlock], gather: &[(u32, u32)]) -> (Vec<GatherBlock>, Vec<GatherVector>) {
+    let per_block = (soa::COMPONENTS * 4) as u32;
+    let mut moves: Vec<(u32, u32)> = gather.iter().map(|&(s, d)| (d, s)).collect();
+    moves.sort_unstable();
+    let mut blocks = Vec::new();
+    let mut rest = Vec::new();
+    let mut start = 0;
+    while start < moves.len() {
+        let pos = moves[start].0 / per_block;
+        let end = start + moves[start..].partition_point(|&(d, _)| d / per_block == pos);
+        let group = &moves[start..end];
+        start = end;
+        // Per lane: (component, source) in component order.
+        let mut lanes: [Vec<(u8, u32)>; 4] = Default::default();
+        for &(d, s) in group {
+            let within = d % per_block;
+            lanes[(within % 4) as usize].push(((within / 4) as u8, s));
+        }
+        let driven = plan.get(pos as usize).map_or(0, |pb| pb.driven);
+        let reference = lanes.iter().find(|l| !l.is_empty());
+        let whole = reference.is_some_and(|r| {
+            (0..4).all(|l| {
+                let lane = &lanes[l];
+                let same = lane.len() == r.len()
+                    && lane.iter().zip(r).all(|(a, b)| a.0 == b.0)
+                    && lane.windows(2).all(|w| w[1].1 == w[0].1 + 1);
+                same || (lane.is_empty() && driven & (1 << l) == 0)
+            })
+        });
+        match reference {
+            Some(r) if whole => {
+                let mut components = [0u8; soa::COMPONENTS];
+                for (k, &(c, _)) in r.iter().enumerate().take(soa::COMPONENTS) {
+                    components[k] = c;
+                }
+                let base = [0, 1, 2, 3].map(|l| lanes[l].first().unwrap_or(&r[0]).1);
+                blocks.push(GatherBlock {
+                    first: pos * soa::COMPONENTS as u32,
+                    base,
+                    components,
+                    floats: r.len().min(soa::COMPONENTS) as u8,
+                });
+            }
+            _ => rest.extend(gather_vectors(
+                &group.iter().map(|&(d, s)| (s, d)).collect::<Vec<_>>(),
+            )),
+        }
+    }
+    (blocks, rest)
 }
 
 /// One vector of a key slot that holds animated lanes: the frame offset of each lane (0 for lanes that
@@ -811,14 +877,16 @@ impl ClipBinding {
             })
             .collect();
         gather.sort_unstable();
+        let (blocks, vectors) = gather_plan(&plan, &gather);
         ClipBinding {
             joint_of_track,
             unmatched,
             driven,
             skeleton_len: skeleton.len(),
             frame_stride: clip.frame_stride(),
+            blocks,
+            vectors,
             plan,
-            vectors: gather_vectors(&gather),
             gather,
             id: Identity::new(),
         }
@@ -865,6 +933,7 @@ impl ClipBinding {
                     .then(|| (src, (pos * block_floats + within) as u32))
             })
             .collect();
+        let (blocks, vectors) = gather_plan(&plan, &gather);
         ClipBinding {
             joint_of_track: self.joint_of_track.clone(),
             unmatched: self.unmatched.clone(),
@@ -876,8 +945,9 @@ impl ClipBinding {
                 .collect(),
             skeleton_len: self.skeleton_len,
             frame_stride: self.frame_stride,
+            blocks,
+            vectors,
             plan,
-            vectors: gather_vectors(&gather),
             gather,
             id: Identity::new(),
         }
@@ -945,6 +1015,7 @@ struct KeyCache {
 
 impl KeyCache {
     /// The slots holding keys `k0` and `k1`, loading whichever is missing.
+    #[inline(always)]
     fn slots(
         &mut self,
         clip: &Clip,
@@ -983,11 +1054,16 @@ impl KeyCache {
     }
 
     /// Gathers key `k`'s animated components into the slot starting at vector `base`.
+    #[inline(always)]
     fn load(&mut self, clip: &Clip, binding: &ClipBinding, k: usize, base: usize) {
         let frame: &[f32] = match &clip.quantized {
             None => {
+                // The frame and the floats after it (the next frame or the padding): runs are read
+                // four floats at a time.
                 let s = clip.stride;
-                clip.frames.get(k * s..(k + 1) * s).unwrap_or_default()
+                clip.frames
+                    .get(k * s..(k + 1) * s + FRAME_PAD)
+                    .unwrap_or_default()
             }
             Some(q) => {
                 self.decoded.resize(q.decoded_stride + FRAME_PAD, 0.0);
@@ -998,6 +1074,36 @@ impl KeyCache {
         // Whole vectors are built in registers and stored once (scalar stores into a vector that is
         // read right after would defeat store-to-load forwarding).
         let slots = &mut self.slots;
+        let row = |i: usize| {
+            frame
+                .get(i..i + 4)
+                .map_or(glam::Vec4::ZERO, glam::Vec4::from_slice)
+        };
+        for g in &binding.blocks {
+            let first = base + g.first as usize;
+            let Some(Ok(block)) = slots
+                .get_mut(first..first + soa::COMPONENTS)
+                .map(<&mut soa::Block>::try_from)
+            else {
+                continue;
+            };
+            let [b0, b1, b2, b3] = g.base.map(|b| b as usize);
+            for k in (0..g.floats as usize).step_by(4) {
+                // Four floats of each lane's run, transposed into one vector per component.
+                let t = glam::Mat4::from_cols(row(b0 + k), row(b1 + k), row(b2 + k), row(b3 + k))
+                    .transpose();
+                for (i, v) in [t.x_axis, t.y_axis, t.z_axis, t.w_axis]
+                    .into_iter()
+                    .enumerate()
+                {
+                    if k + i < g.floats as usize {
+                        if let Some(slot) = block.get_mut(g.components[k + i] as usize) {
+                            *slot = v;
+                        }
+                    }
+                }
+            }
+        }
         let f = |i: u32| frame.get(i as usize).copied().unwrap_or(0.0);
         for g in &binding.vectors {
             if let Some(slot) = slots.get_mut(base + g.dst as usize) {
@@ -1529,6 +1635,44 @@ mod tests {
     fn work_lists_and_key_cache_match_the_reference_bit_for_bit() {
         let sk = skeleton();
         let mut clips = vec![walk(false), walk(true)];
+        // Both joints animate translation and rotation (one block loads by transposition), in either
+        // track order, so that each joint's run ends the frame once; and with scale too.
+        for names in [["root", "arm"], ["arm", "root"]] {
+            for with_scale in [false, true] {
+                let times = vec![0.0, 0.3, 0.45, 1.0];
+                let tracks = names
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| {
+                        let f = i as f32 + 1.0;
+                        let scale = if with_scale {
+                            Curve::new(
+                                times.clone(),
+                                times.iter().map(|&t| Vec3::splat(1.0 + t * f)).collect(),
+                            )
+                        } else {
+                            Curve::default()
+                        };
+                        TrackCurves {
+                            joint: (*n).into(),
+                            translation: Curve::new(
+                                times.clone(),
+                                times.iter().map(|&t| Vec3::new(t, -f * t, 2.0)).collect(),
+                            ),
+                            rotation: Curve::new(
+                                times.clone(),
+                                times
+                                    .iter()
+                                    .map(|&t| Quat::from_rotation_y(t * f * 2.0))
+                                    .collect(),
+                            ),
+                            scale,
+                        }
+                    })
+                    .collect();
+                clips.push(Clip::from_curves("uniform", 1.0, 4.0, true, false, tracks).unwrap());
+            }
+        }
         for (l, a) in [(false, false), (true, false), (false, true)] {
             let c = compressed(l, a);
             clips.push(c.to_plain());

@@ -44,7 +44,14 @@ fn skeleton(rng: &mut Rng) -> Skeleton {
 
 /// A clip over `joints` (some names unknown to the skeleton), with a mix of animated, constant and
 /// missing channels and keys at uneven times.
-fn clip(rng: &mut Rng, name: &str, joints: &[&str], looping: bool, additive: bool) -> Arc<Clip> {
+fn clip(
+    rng: &mut Rng,
+    name: &str,
+    joints: &[&str],
+    looping: bool,
+    additive: bool,
+    pattern: usize,
+) -> Arc<Clip> {
     let times: Vec<f32> = (0..9)
         .map(|k| k as f32 * 0.11 + (k % 3) as f32 * 0.01)
         .collect();
@@ -56,7 +63,14 @@ fn clip(rng: &mut Rng, name: &str, joints: &[&str], looping: bool, additive: boo
                 joint: (*j).into(),
                 ..Default::default()
             };
-            match i % 4 {
+            // Pattern 4: every track animates translation and rotation (whole blocks load by
+            // transposition, and the last track's run ends the frame).
+            let kind = if pattern % 5 == 4 {
+                0
+            } else {
+                (i + pattern) % 4
+            };
+            match kind {
                 0 => {
                     t.rotation =
                         Curve::new(times.clone(), times.iter().map(|_| rng.quat()).collect());
@@ -152,16 +166,18 @@ fn reference(
 
 #[test]
 fn block_path_matches_the_per_joint_functions_bit_for_bit() {
-    for seed in [1u32, 0xdead_beef, 0x1234_5678] {
+    for seed in [1u32, 0xdead_beef, 0x1234_5678, 6, 7, 4, 9] {
         let mut rng = Rng(seed);
         let skeleton = Arc::new(skeleton(&mut rng));
         let names: Vec<String> = skeleton.names().to_vec();
         let all: Vec<&str> = names.iter().map(String::as_str).collect();
         let upper: Vec<&str> = all[5..].iter().copied().chain(["not-a-joint"]).collect();
-        let walk = clip(&mut rng, "walk", &all, true, false);
-        let run = clip(&mut rng, "run", &all[1..], false, false);
-        let wave = clip(&mut rng, "wave", &upper, true, false);
-        let lean = clip(&mut rng, "lean", &all[2..9], true, true);
+        // The channel patterns rotate so that every kind of track ends a frame somewhere.
+        let p = seed as usize % 5;
+        let walk = clip(&mut rng, "walk", &all, true, false, p);
+        let run = clip(&mut rng, "run", &all[1..], false, false, p + 1);
+        let wave = clip(&mut rng, "wave", &upper, true, false, p + 2);
+        let lean = clip(&mut rng, "lean", &all[2..9], true, true, p + 3);
         let mut anim = Animator::new(skeleton.clone());
         let ids = [
             anim.add_clip(walk),

@@ -591,15 +591,11 @@ fn blend_layers_generic(
             continue;
         }
         let binding = s.masked.as_ref().unwrap_or(&s.binding);
+        let mask = s.mask_blocks.as_deref();
         s.sampler
-            .sample_blocks(&s.clip, binding, s.time, &mut s.blocks)?;
-        soa::accumulate(
-            accum,
-            binding.plan(),
-            &s.blocks,
-            w,
-            s.mask_blocks.as_deref(),
-        );
+            .sample_each(&s.clip, binding, s.time, |pb, block| {
+                soa::accumulate_block(accum, pb, block, w, mask);
+            })?;
     }
     soa::resolve(accum, bind, local);
     Ok(())

@@ -1009,8 +1009,6 @@ struct KeyCache {
     slots: Vec<glam::Vec4>,
     /// A compressed key decoded in its frame layout, before it is gathered into a slot.
     decoded: Vec<f32>,
-    /// Sampled blocks for [`Sampler::sample`] (one per plan block).
-    blocks: Vec<glam::Vec4>,
 }
 
 impl KeyCache {
@@ -1034,8 +1032,6 @@ impl KeyCache {
                     self.slots.extend_from_slice(&pb.fixed);
                 }
             }
-            self.blocks.clear();
-            self.blocks.resize(len, glam::Vec4::ZERO);
         }
         let find = |k: usize| self.keys.iter().position(|&x| x == k);
         let (s0, s1) = match (find(k0), find(k1)) {
@@ -1190,23 +1186,13 @@ impl Sampler {
         if binding.skeleton_len != skeleton.len() {
             return Err(ClipError::BindingMismatch);
         }
-        let mut blocks = std::mem::take(&mut self.cache.blocks);
-        let result = self.sample_blocks(clip, binding, t, &mut blocks);
-        if result.is_ok() {
-            for (pb, block) in binding
-                .plan
-                .iter()
-                .zip(blocks.chunks_exact(soa::COMPONENTS))
-            {
-                soa::write_transforms(
-                    block,
-                    pb.driven,
-                    out.get_mut(pb.block * 4..).unwrap_or_default(),
-                );
-            }
-        }
-        self.cache.blocks = blocks;
-        result
+        self.sample_each(clip, binding, t, |pb, block| {
+            soa::write_transforms(
+                block,
+                pb.driven,
+                out.get_mut(pb.block * 4..).unwrap_or_default(),
+            );
+        })
     }
 
     /// Samples the clip at playback time `t` into `out`, one block of [`soa::COMPONENTS`] vectors per
@@ -1220,15 +1206,35 @@ impl Sampler {
         t: f32,
         out: &mut Vec<glam::Vec4>,
     ) -> Result<(), ClipError> {
+        let len = binding.plan.len() * soa::COMPONENTS;
+        if out.len() != len {
+            out.resize(len, glam::Vec4::ZERO);
+        }
+        let mut blocks = out.chunks_exact_mut(soa::COMPONENTS);
+        self.sample_each(clip, binding, t, |_, block| {
+            if let Some(o) = blocks.next() {
+                o.copy_from_slice(block);
+            }
+        })
+    }
+
+    /// Samples the clip at playback time `t` block by block, handing each block of the binding's plan
+    /// to `f` as it is made (in plan order). Lanes of joints the clip does not drive hold unspecified
+    /// finite values.
+    #[inline(always)]
+    pub(crate) fn sample_each(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        t: f32,
+        mut f: impl FnMut(&PlanBlock, &soa::Block),
+    ) -> Result<(), ClipError> {
         if binding.joint_of_track.len() != clip.tracks.len()
             || binding.frame_stride != clip.frame_stride()
         {
             return Err(ClipError::BindingMismatch);
         }
         let len = binding.plan.len() * soa::COMPONENTS;
-        if out.len() != len {
-            out.resize(len, glam::Vec4::ZERO);
-        }
         let t = clip.local_time(t);
         let (k0, k1, a) = self.locate(clip, t);
         let (s0, s1) = self.cache.slots(clip, binding, k0, k1);
@@ -1240,10 +1246,11 @@ impl Sampler {
         let raw = clip.quantized.is_some();
         let blocks = c0
             .chunks_exact(soa::COMPONENTS)
-            .zip(c1.chunks_exact(soa::COMPONENTS))
-            .zip(out.chunks_exact_mut(soa::COMPONENTS));
-        for (pb, ((b0, b1), o)) in binding.plan.iter().zip(blocks) {
-            soa::sample_block(pb, b0, b1, a, raw, o);
+            .zip(c1.chunks_exact(soa::COMPONENTS));
+        for (pb, (b0, b1)) in binding.plan.iter().zip(blocks) {
+            if let (Ok(b0), Ok(b1)) = (<&soa::Block>::try_from(b0), <&soa::Block>::try_from(b1)) {
+                f(pb, &soa::sample_block(pb, b0, b1, a, raw));
+            }
         }
         Ok(())
     }

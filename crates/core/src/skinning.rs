@@ -130,8 +130,10 @@ multiversion! {
     /// [`local_to_model_and_palette`] reading the local pose from blocks of four joints (see
     /// [`crate::soa`]; joint `i` is lane `i % 4` of block `i / 4`). Same arithmetic, same bits.
     ///
-    /// All local matrices are built first (into `scratch`), then the joints are visited in `order`,
-    /// which must list every joint once, after its parent: the skeleton's [`level_order`], which puts
+    /// `parents` must be a [`crate::Skeleton`]'s (every parent before its child; not checked again
+    /// here, once per frame). All local matrices are built first (into `scratch`), then the joints are
+    /// visited in `order`, which must list every joint once, after its parent: the skeleton's
+    /// [`level_order`], which puts
     /// a joint's dependants a whole level of the skeleton later, so the CPU can overlap independent
     /// joints instead of waiting on each parent. (Indices are checked, so a wrong order gives wrong
     /// matrices, never a panic.)
@@ -166,7 +168,6 @@ fn local_to_model_and_palette_blocks_generic(
     same_len("inverse bind matrices", n, inverse_bind.len())?;
     same_len("palette", n, palette.len())?;
     same_len("joint order", n, order.len())?;
-    check_parents(parents)?;
     scratch.resize(soa::block_count(n) * LOCAL, 0.0);
     for (block, local) in blocks
         .chunks_exact(soa::COMPONENTS)
@@ -273,7 +274,7 @@ fn model_of(
     lane: usize,
 ) -> Mat4 {
     let parent = match parents[i] {
-        Some(p) => &models[p as usize],
+        Some(p) => models.get(p as usize).unwrap_or(&Mat4::IDENTITY),
         None => &Mat4::IDENTITY,
     };
     let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);

@@ -215,24 +215,17 @@ impl PlanBlock {
 #[inline(always)]
 pub(crate) fn sample_block(
     plan: &PlanBlock,
-    c0: &[Vec4],
-    c1: &[Vec4],
+    c0: &Block,
+    c1: &Block,
     a: f32,
     raw_rotations: bool,
-    out: &mut [Vec4],
-) {
-    let (Ok(c0), Ok(c1), Ok(out)) = (
-        <&Block>::try_from(c0),
-        <&Block>::try_from(c1),
-        <&mut Block>::try_from(out),
-    ) else {
-        return;
-    };
+) -> Block {
     let fixed = &plan.fixed;
+    let mut out = *fixed;
     let (ta, tb) = (Vec4::splat(1.0 - a), Vec4::splat(a));
     for (kind, first) in [(0, T), (2, S)] {
         match plan.source[kind] {
-            Source::Fixed => out[first..first + 3].copy_from_slice(&fixed[first..first + 3]),
+            Source::Fixed => {}
             _ if a == 0.0 => out[first..first + 3].copy_from_slice(&c0[first..first + 3]),
             Source::Animated => {
                 for c in first..first + 3 {
@@ -248,13 +241,10 @@ pub(crate) fn sample_block(
         }
     }
     let q = match plan.source[1] {
-        Source::Fixed => {
-            out[R..R + 4].copy_from_slice(&fixed[R..R + 4]);
-            return;
-        }
+        Source::Fixed => return out,
         _ if a == 0.0 && !raw_rotations => {
             out[R..R + 4].copy_from_slice(&c0[R..R + 4]);
-            return;
+            return out;
         }
         _ if a == 0.0 => normalize_q(rotation(c0)),
         _ => {
@@ -269,55 +259,50 @@ pub(crate) fn sample_block(
             out[R + i] = select(m, v, fixed[R + i]);
         }
     } else {
-        for (i, v) in q.into_iter().enumerate() {
-            out[R + i] = v;
-        }
+        out[R..R + 4].copy_from_slice(&q);
     }
+    out
 }
 
 /// Vectors per accumulator block: translation 3, rotation 4, scale 3, total weight 1.
 pub(crate) const ACCUM: usize = 11;
 const W: usize = 10;
 
-/// Adds one normal layer's sampled blocks to the accumulators (see [`crate::blend`] for the
-/// arithmetic, which this follows lane for lane). `pose[i]` is the sampled block of `plan[i]`;
-/// `mask` holds one block of per-joint factors per skeleton block.
+/// Adds one sampled block `p` of a normal layer (plan block `pb`) to the accumulators (see
+/// [`crate::blend`] for the arithmetic, which this follows lane for lane). `mask` holds one vector of
+/// per-joint factors per skeleton block.
 #[inline(always)]
-pub(crate) fn accumulate(
+pub(crate) fn accumulate_block(
     accum: &mut [Vec4],
-    plan: &[PlanBlock],
-    pose: &[Vec4],
+    pb: &PlanBlock,
+    p: &Block,
     weight: f32,
     mask: Option<&[Vec4]>,
 ) {
-    for (pb, p) in plan.iter().zip(pose.chunks_exact(COMPONENTS)) {
-        let b = pb.block;
-        let (Some(Ok(a)), Ok(p)) = (
-            accum
-                .get_mut(b * ACCUM..(b + 1) * ACCUM)
-                .map(<&mut [Vec4; ACCUM]>::try_from),
-            <&Block>::try_from(p),
-        ) else {
-            continue;
-        };
-        let w = match mask {
-            Some(m) => Vec4::splat(weight) * m.get(b).copied().unwrap_or(Vec4::ZERO),
-            None => Vec4::splat(weight),
-        };
-        // Lanes that contribute: driven, with a weight above zero (NaN excluded). The others add
-        // `value * 0`, which leaves a sum that never holds -0 unchanged (values are finite).
-        let w = select(lanes(pb.driven) & w.cmpgt(Vec4::ZERO), w, Vec4::ZERO);
-        let acc_r = [a[R], a[R + 1], a[R + 2], a[R + 3]];
-        let q = negate_where_negative(rotation(p), dot_q(&acc_r, &rotation(p)));
-        for c in 0..3 {
-            a[T + c] += p[T + c] * w;
-            a[S + c] += p[S + c] * w;
-        }
-        for (c, v) in q.into_iter().enumerate() {
-            a[R + c] += v * w;
-        }
-        a[W] += w;
+    let b = pb.block;
+    let Some(Ok(a)) = accum
+        .get_mut(b * ACCUM..(b + 1) * ACCUM)
+        .map(<&mut [Vec4; ACCUM]>::try_from)
+    else {
+        return;
+    };
+    let w = match mask {
+        Some(m) => Vec4::splat(weight) * m.get(b).copied().unwrap_or(Vec4::ZERO),
+        None => Vec4::splat(weight),
+    };
+    // Lanes that contribute: driven, with a weight above zero (NaN excluded). The others add
+    // `value * 0`, which leaves a sum that never holds -0 unchanged (values are finite).
+    let w = select(lanes(pb.driven) & w.cmpgt(Vec4::ZERO), w, Vec4::ZERO);
+    let acc_r = [a[R], a[R + 1], a[R + 2], a[R + 3]];
+    let q = negate_where_negative(rotation(p), dot_q(&acc_r, &rotation(p)));
+    for c in 0..3 {
+        a[T + c] += p[T + c] * w;
+        a[S + c] += p[S + c] * w;
     }
+    for (c, v) in q.into_iter().enumerate() {
+        a[R + c] += v * w;
+    }
+    a[W] += w;
 }
 
 /// Writes the blend of the accumulated layers into `out` (one block per skeleton block), filling with

@@ -9,6 +9,13 @@
 //! percent of the original's bounding-box diagonal. Sinew's LODs are built twice: at the nominal
 //! targets (0.5, 0.25) and at the ratios the other files reached, so that rows compare equal
 //! triangle counts.
+//!
+//! Posed distances: every file is skinned with its own skeleton and first clip at half the clip's
+//! duration ("own clip"; gltfpack resamples animation, so its own clip is not exactly the original's)
+//! and, when its skeleton has the original's joint names and inverse bind matrices, also with the
+//! original's palette ("original's clip"), which poses both files identically.
+//!
+//! `--sweep` builds sinew's LODs with one quality knob changed at a time (docs/lod.md).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 #[path = "../tests/lod_common.rs"]
@@ -80,6 +87,19 @@ fn mid_pose(scene: &Scene) -> Option<(Vec<Mat4>, String, f32)> {
     Some((palette, c.name.clone(), t))
 }
 
+/// True when `other` has the original's joints in the same order with the same inverse bind matrices
+/// (within 1e-5), so that the original's palette poses it the way it poses the original.
+fn same_rig(original: &Scene, other: &Scene) -> bool {
+    let (Some(a), Some(b)) = (&original.skeleton, &other.skeleton) else {
+        return false;
+    };
+    a.names() == b.names()
+        && a.inverse_bind()
+            .iter()
+            .zip(b.inverse_bind())
+            .all(|(x, y)| x.abs_diff_eq(*y, 1e-5))
+}
+
 fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     scene
         .meshes
@@ -96,22 +116,26 @@ struct Row {
     triangles: usize,
     hausdorff: f32,
     posed: Option<f32>,
+    /// Posed with the original's palette (sinew rows: the same as `posed`).
+    posed_same: Option<f32>,
     seconds: f64,
 }
 
 fn print_rows(rows: &[Row], base_tris: usize) {
     println!(
-        "| tool | triangles | ratio | Hausdorff (% diag) | posed Hausdorff (% diag) | time (ms) |"
+        "| tool | triangles | ratio | Hausdorff (% diag) | posed, own clip (% diag) | posed, original's clip (% diag) | time (ms) |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
+    let f = |h: Option<f32>| h.map_or("-".into(), |h| format!("{h:.3}"));
     for r in rows {
         println!(
-            "| {} | {} | {:.3} | {:.3} | {} | {:.1} |",
+            "| {} | {} | {:.3} | {:.3} | {} | {} | {:.1} |",
             r.tool,
             r.triangles,
             r.triangles as f64 / base_tris as f64,
             r.hausdorff,
-            r.posed.map_or("-".into(), |h| format!("{h:.3}")),
+            f(r.posed),
+            f(r.posed_same),
             r.seconds * 1e3
         );
     }
@@ -185,6 +209,7 @@ fn main() {
                     triangles: triangles(&s, Some(k)),
                     hausdorff: h,
                     posed,
+                    posed_same: posed,
                     seconds,
                 }
             })
@@ -196,80 +221,55 @@ fn main() {
     if others.first().map(String::as_str) == Some("--sweep") {
         // The quality knobs one at a time against the defaults (docs/lod.md).
         let d = LodTuning::default();
+        let with = |f: &dyn Fn(&mut LodTuning)| {
+            let mut t = d;
+            f(&mut t);
+            t
+        };
         let variants: Vec<(&str, LodTuning, f32)> = vec![
             ("default", d, DEFAULT_MAX_ERROR),
             (
+                "not-permissive",
+                with(&|t| t.permissive = false),
+                DEFAULT_MAX_ERROR,
+            ),
+            ("from-lod0", with(&|t| t.chain = false), DEFAULT_MAX_ERROR),
+            (
                 "no-regularize",
-                LodTuning {
-                    regularize: false,
-                    ..d
-                },
+                with(&|t| t.regularize = false),
                 DEFAULT_MAX_ERROR,
             ),
-            (
-                "no-pose",
-                LodTuning {
-                    pose_weight: 0.0,
-                    ..d
-                },
-                DEFAULT_MAX_ERROR,
-            ),
-            (
-                "pose-0.25",
-                LodTuning {
-                    pose_weight: 0.25,
-                    ..d
-                },
-                DEFAULT_MAX_ERROR,
-            ),
-            (
-                "pose-4",
-                LodTuning {
-                    pose_weight: 4.0,
-                    ..d
-                },
-                DEFAULT_MAX_ERROR,
-            ),
+            ("pose-0", with(&|t| t.pose_weight = 0.0), DEFAULT_MAX_ERROR),
+            ("pose-1", with(&|t| t.pose_weight = 1.0), DEFAULT_MAX_ERROR),
+            ("pose-8", with(&|t| t.pose_weight = 8.0), DEFAULT_MAX_ERROR),
             (
                 "normal-0",
-                LodTuning {
-                    normal_weight: 0.0,
-                    ..d
-                },
+                with(&|t| t.normal_weight = 0.0),
                 DEFAULT_MAX_ERROR,
             ),
             (
-                "normal-2",
-                LodTuning {
-                    normal_weight: 2.0,
-                    ..d
-                },
+                "normal-0.5",
+                with(&|t| t.normal_weight = 0.5),
                 DEFAULT_MAX_ERROR,
             ),
-            (
-                "uv-0",
-                LodTuning {
-                    uv_weight: 0.0,
-                    ..d
-                },
-                DEFAULT_MAX_ERROR,
-            ),
-            (
-                "uv-2",
-                LodTuning {
-                    uv_weight: 2.0,
-                    ..d
-                },
-                DEFAULT_MAX_ERROR,
-            ),
+            ("uv-0", with(&|t| t.uv_weight = 0.0), DEFAULT_MAX_ERROR),
+            ("uv-2", with(&|t| t.uv_weight = 2.0), DEFAULT_MAX_ERROR),
             (
                 "attrs-0",
-                LodTuning {
-                    normal_weight: 0.0,
-                    uv_weight: 0.0,
-                    pose_weight: 0.0,
-                    ..d
-                },
+                with(&|t| {
+                    t.normal_weight = 0.0;
+                    t.uv_weight = 0.0;
+                    t.pose_weight = 0.0;
+                }),
+                DEFAULT_MAX_ERROR,
+            ),
+            (
+                "previous-default",
+                with(&|t| {
+                    t.normal_weight = 0.5;
+                    t.pose_weight = 1.0;
+                    t.permissive = false;
+                }),
                 DEFAULT_MAX_ERROR,
             ),
             ("max-error-0.02", d, 0.02),
@@ -289,6 +289,10 @@ fn main() {
         let tris = triangles(&o, None);
         let opose = mid_pose(&o);
         let (h, posed) = measure(&o, None, opose.as_ref().map(|(p, _, _)| p.as_slice()));
+        let posed_same = match (&pose, same_rig(&scene, &o)) {
+            (Some((pal, _, _)), true) => measure(&o, None, Some(pal)).1,
+            _ => None,
+        };
         let name = Path::new(other)
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -298,6 +302,7 @@ fn main() {
             triangles: tris,
             hausdorff: h,
             posed,
+            posed_same,
             seconds: f64::NAN,
         });
         reached.push(tris as f32 / base_tris as f32);

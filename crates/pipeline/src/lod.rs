@@ -10,10 +10,10 @@
 //!   they matter and cheap where they do not;
 //! - locks on material borders: a vertex whose position is also used by another submesh does not move,
 //!   so neighbouring submeshes still meet;
-//! - meshoptimizer's `Permissive` option with every UV seam and skin seam protected: vertices that
-//!   share a position but differ only in their normal (hard edges) may be collapsed across, with the
-//!   normal difference counted as attribute error, while UV seams and vertices whose weights differ
-//!   keep meshoptimizer's usual seam rules;
+//! - meshoptimizer's `Permissive` option with every vertex protected except those on hard normal
+//!   edges: vertices that share a position but differ only in their normal may be collapsed across,
+//!   with the normal difference counted as attribute error, while UV seams, skin seams and everything
+//!   else keep meshoptimizer's usual rules;
 //! - meshoptimizer's `RegularizeLight` option, which its author recommends for deforming meshes.
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
@@ -66,8 +66,8 @@ pub struct LodTuning {
     pub pose_weight: f32,
     /// meshoptimizer's `RegularizeLight` option.
     pub regularize: bool,
-    /// meshoptimizer's `Permissive` option, with UV seams and skin seams protected (false: every
-    /// attribute seam, hard normal edges included, restricts collapses).
+    /// meshoptimizer's `Permissive` option, with every vertex but those on hard normal edges protected
+    /// (false: hard normal edges restrict collapses like every other attribute seam).
     pub permissive: bool,
     /// Build each LOD from the previous one (true) or every LOD from LOD 0 (false, each with the
     /// whole error budget).
@@ -273,10 +273,12 @@ fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
 
 /// Per-vertex flags for meshoptimizer, one per vertex (never an empty slice for a mesh with vertices):
 /// - `Lock` for vertices whose position is used by more than one submesh (material borders);
-/// - `Protect` for vertices whose position is shared with a vertex of another UV or other joints or
-///   weights (UV seams, skin seams). With `Permissive` these keep meshoptimizer's seam rules, while
-///   vertices that differ from their position-twins only in the normal (hard edges) may be
-///   collapsed across. Without `Permissive`, `Protect` changes nothing.
+/// - `Protect` for every other vertex except those on a hard normal edge: a position shared by
+///   several vertices that all have the same UV, joints and weights and differ only in the normal.
+///   With `Permissive`, meshoptimizer may collapse across the discontinuities of unprotected vertices
+///   (paying the normal difference as attribute error) and treats protected ones as it does without
+///   `Permissive`: UV seams, skin seams and whatever it locks for topology stay as they were. Without
+///   `Permissive`, `Protect` changes nothing.
 fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
     let key = |p: glam::Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
     let mut owner: HashMap<[u32; 3], usize> = HashMap::new();
@@ -296,10 +298,10 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
             }
         }
     }
-    // The first vertex at each position, and the positions where a later vertex differs from it in
-    // UV, joints or weights.
+    // Per position: its first vertex, and whether a later vertex there has the same UV and skin
+    // (a hard normal edge, opened) or not (a UV or skin seam, kept).
     let mut first: HashMap<[u32; 3], usize> = HashMap::new();
-    let mut seams: HashSet<[u32; 3]> = HashSet::new();
+    let mut hard_edge: HashMap<[u32; 3], bool> = HashMap::new();
     for (v, p) in lod.positions.iter().enumerate() {
         let k = key(*p);
         match first.get(&k) {
@@ -307,12 +309,11 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
                 first.insert(k, v);
             }
             Some(&a) => {
-                let uv = lod.uvs.get(a) != lod.uvs.get(v);
-                let skin = lod.joints.get(a) != lod.joints.get(v)
-                    || lod.weights.get(a) != lod.weights.get(v);
-                if uv || skin {
-                    seams.insert(k);
-                }
+                let same = lod.uvs.get(a) == lod.uvs.get(v)
+                    && lod.joints.get(a) == lod.joints.get(v)
+                    && lod.weights.get(a) == lod.weights.get(v);
+                let open = hard_edge.entry(k).or_insert(true);
+                *open &= same;
             }
         }
     }
@@ -322,10 +323,10 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
             let k = key(*p);
             if shared.contains(&k) {
                 SimplifyVertex::Lock
-            } else if seams.contains(&k) {
-                SimplifyVertex::Protect
-            } else {
+            } else if hard_edge.get(&k) == Some(&true) {
                 SimplifyVertex::None
+            } else {
+                SimplifyVertex::Protect
             }
         })
         .collect()

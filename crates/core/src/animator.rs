@@ -21,9 +21,13 @@
 //!
 //! [`Animator::update`] and [`Animator::evaluate`] never allocate.
 
-use crate::blend::{apply_additive, BlendBuffers, BlendError, Layer};
+use crate::blend::{apply_additive, BlendError, Layer};
 use crate::clip::{ClipBinding, ClipError, Sampler};
+use crate::cpu::multiversion;
+use crate::skinning::{self, SkinError};
+use crate::soa;
 use crate::{Clip, Skeleton, Transform};
+use glam::{Mat4, Vec4};
 use std::collections::VecDeque;
 use std::sync::Arc;
 
@@ -54,6 +58,9 @@ pub enum AnimatorError {
     /// Blending failed.
     #[error(transparent)]
     Blend(#[from] BlendError),
+    /// Local-to-model or the palette failed (output buffers of the wrong length).
+    #[error(transparent)]
+    Skin(#[from] SkinError),
 }
 
 /// A linear fade of a layer's fade factor from `from` to `to` over `length` seconds.
@@ -90,9 +97,14 @@ impl Fade {
 struct Slot {
     clip: Arc<Clip>,
     binding: Arc<ClipBinding>,
+    /// `binding` restricted to the joints the mask reaches (mask > 0); `None` without a mask.
+    masked: Option<ClipBinding>,
     sampler: Sampler,
-    pose: Vec<Transform>,
+    /// The layer's last sampled blocks (one per block of its binding's plan).
+    blocks: Vec<Vec4>,
     mask: Option<Vec<f32>>,
+    /// `mask` as blocks of four joints.
+    mask_blocks: Option<Vec<Vec4>>,
     active: bool,
     time: f32,
     speed: f32,
@@ -107,7 +119,16 @@ pub struct Animator {
     slots: Vec<Slot>,
     current: Option<usize>,
     queue: VecDeque<(usize, f32)>,
-    buffers: BlendBuffers,
+    /// Blend accumulators, [`soa::ACCUM`] vectors per block of four joints.
+    accum: Vec<Vec4>,
+    /// The blended local pose, [`soa::COMPONENTS`] vectors per block.
+    local: Vec<Vec4>,
+    /// Local transforms, for additive layers and the per-joint output.
+    locals: Vec<Transform>,
+    /// An additive layer's sampled differences, one per joint.
+    differences: Vec<Transform>,
+    /// Local matrices for [`Animator::evaluate_palette`].
+    local_matrices: Vec<f32>,
 }
 
 impl Animator {
@@ -115,11 +136,15 @@ impl Animator {
     pub fn new(skeleton: Arc<Skeleton>) -> Self {
         let n = skeleton.len();
         Self {
-            skeleton,
             slots: Vec::new(),
             current: None,
             queue: VecDeque::new(),
-            buffers: BlendBuffers::new(n),
+            accum: vec![Vec4::ZERO; soa::block_count(n) * soa::ACCUM],
+            local: vec![Vec4::ZERO; soa::block_count(n) * soa::COMPONENTS],
+            locals: skeleton_bind(&skeleton),
+            differences: vec![Transform::IDENTITY; n],
+            local_matrices: vec![0.0; soa::block_count(n) * 48],
+            skeleton,
         }
     }
 
@@ -149,12 +174,18 @@ impl Animator {
 
     fn push_slot(&mut self, clip: Arc<Clip>, binding: Arc<ClipBinding>) -> ClipId {
         let id = self.slots.len();
+        let mut sampler = Sampler::new();
+        let mut blocks = Vec::new();
+        // Sizes the sampler's key cache and the blocks now, so that frames never allocate.
+        let _ = sampler.sample_blocks(&clip, &binding, 0.0, &mut blocks);
         self.slots.push(Slot {
             clip,
             binding,
-            sampler: Sampler::new(),
-            pose: self.skeleton.bind_local().to_vec(),
+            masked: None,
+            sampler,
+            blocks,
             mask: None,
+            mask_blocks: None,
             active: false,
             time: 0.0,
             speed: 1.0,
@@ -201,7 +232,23 @@ impl Animator {
                 });
             }
         }
-        self.slot_mut(id)?.mask = mask;
+        let s = self.slot_mut(id)?;
+        s.masked = mask.as_deref().map(|m| {
+            s.binding
+                .restricted(|j| m.get(j as usize).is_some_and(|&w| w > 0.0))
+        });
+        s.mask_blocks = mask.as_deref().map(|m| {
+            let mut blocks = vec![Vec4::ZERO; soa::block_count(m.len())];
+            for (j, &v) in m.iter().enumerate() {
+                blocks[j / 4][j % 4] = v;
+            }
+            blocks
+        });
+        s.mask = mask;
+        let binding = s.masked.as_ref().unwrap_or(&s.binding);
+        let _ = s
+            .sampler
+            .sample_blocks(&s.clip, binding, s.time, &mut s.blocks);
         Ok(())
     }
 
@@ -421,42 +468,95 @@ impl Animator {
     /// Samples every active layer with its own cursor and blends them into `out` (one local transform
     /// per skeleton joint). Joints no layer drives take the bind pose.
     pub fn evaluate(&mut self, out: &mut [Transform]) -> Result<(), AnimatorError> {
-        let skeleton = &*self.skeleton;
-        if out.len() != skeleton.len() {
+        let n = self.skeleton.len();
+        if out.len() != n {
             return Err(ClipError::OutputLength {
-                expected: skeleton.len(),
+                expected: n,
                 got: out.len(),
             }
             .into());
         }
-        self.buffers.reset();
-        for s in self.slots.iter_mut() {
-            let w = s.weight * s.fade.factor();
-            if !s.active || s.clip.additive() || w.is_nan() || w <= 0.0 {
-                continue;
-            }
-            s.sampler
-                .sample(&s.clip, &s.binding, skeleton, s.time, &mut s.pose)?;
-            self.buffers.accumulate(&Layer {
-                pose: &s.pose,
-                driven: s.binding.driven(),
-                weight: w,
-                mask: s.mask.as_deref(),
-            })?;
+        self.blend_normal_layers()?;
+        for (block, o) in self
+            .local
+            .chunks_exact(soa::COMPONENTS)
+            .zip(out.chunks_mut(4))
+        {
+            soa::write_transforms(block, 0b1111, o);
         }
-        self.buffers.resolve(skeleton.bind_local(), out)?;
+        self.apply_additive_layers(out)
+    }
+
+    /// [`Animator::evaluate`] followed by [`crate::local_to_model_and_palette`]: the model matrix of every
+    /// joint and its skinning palette entry, for this frame. Without additive layers the blended pose
+    /// goes from the blend's four-joint blocks straight into local-to-model; the results are the same
+    /// bits as the two calls.
+    pub fn evaluate_palette(
+        &mut self,
+        models: &mut [Mat4],
+        palette: &mut [Mat4],
+    ) -> Result<(), AnimatorError> {
+        let skeleton = self.skeleton.clone();
+        if self.slots.iter().any(|s| s.active && s.clip.additive()) {
+            let mut locals = std::mem::take(&mut self.locals);
+            let result = self.evaluate(&mut locals);
+            self.locals = locals;
+            result?;
+            skinning::local_to_model_and_palette(
+                skeleton.parents(),
+                &self.locals,
+                skeleton.inverse_bind(),
+                models,
+                palette,
+            )?;
+            return Ok(());
+        }
+        self.blend_normal_layers()?;
+        skinning::local_to_model_and_palette_blocks(
+            skeleton.parents(),
+            skeleton.level_order(),
+            &self.local,
+            skeleton.inverse_bind(),
+            &mut self.local_matrices,
+            models,
+            palette,
+        )?;
+        Ok(())
+    }
+
+    /// Samples the active normal layers and blends them into `self.local` (blocks).
+    fn blend_normal_layers(&mut self) -> Result<(), AnimatorError> {
+        blend_layers(
+            &mut self.slots,
+            self.skeleton.bind_blocks(),
+            &mut self.accum,
+            &mut self.local,
+        )
+    }
+
+    /// Applies the active additive layers, in the order their clips were added, to `out`.
+    fn apply_additive_layers(&mut self, out: &mut [Transform]) -> Result<(), AnimatorError> {
         for s in self.slots.iter_mut() {
             let w = s.weight * s.fade.factor();
             if !s.active || !s.clip.additive() || w.is_nan() || w <= 0.0 {
                 continue;
             }
+            let binding = s.masked.as_ref().unwrap_or(&s.binding);
             s.sampler
-                .sample(&s.clip, &s.binding, skeleton, s.time, &mut s.pose)?;
+                .sample_blocks(&s.clip, binding, s.time, &mut s.blocks)?;
+            for (pb, block) in binding
+                .plan()
+                .iter()
+                .zip(s.blocks.chunks_exact(soa::COMPONENTS))
+            {
+                let out = self.differences.get_mut(pb.block * 4..).unwrap_or_default();
+                soa::write_transforms(block, pb.driven, out);
+            }
             apply_additive(
                 out,
                 &Layer {
-                    pose: &s.pose,
-                    driven: s.binding.driven(),
+                    pose: &self.differences,
+                    driven: binding.driven(),
                     weight: w,
                     mask: s.mask.as_deref(),
                 },
@@ -464,6 +564,45 @@ impl Animator {
         }
         Ok(())
     }
+}
+
+multiversion! {
+    /// Samples the active normal layers of `slots` and blends them into `local` (blocks), with `bind`
+    /// (blocks) where their weights fall short.
+    fn blend_layers(
+        slots: &mut [Slot],
+        bind: &[Vec4],
+        accum: &mut [Vec4],
+        local: &mut [Vec4],
+    ) -> Result<(), AnimatorError> => blend_layers_generic;
+}
+
+#[inline(always)]
+fn blend_layers_generic(
+    slots: &mut [Slot],
+    bind: &[Vec4],
+    accum: &mut [Vec4],
+    local: &mut [Vec4],
+) -> Result<(), AnimatorError> {
+    accum.fill(Vec4::ZERO);
+    for s in slots.iter_mut() {
+        let w = s.weight * s.fade.factor();
+        if !s.active || s.clip.additive() || w.is_nan() || w <= 0.0 {
+            continue;
+        }
+        let binding = s.masked.as_ref().unwrap_or(&s.binding);
+        let mask = s.mask_blocks.as_deref();
+        s.sampler
+            .sample_each(&s.clip, binding, s.time, |pb, block| {
+                soa::accumulate_block(accum, pb, block, w, mask);
+            })?;
+    }
+    soa::resolve(accum, bind, local);
+    Ok(())
+}
+
+fn skeleton_bind(skeleton: &Skeleton) -> Vec<Transform> {
+    skeleton.bind_local().to_vec()
 }
 
 /// Wraps a looping clip's time into `[0, duration)`; clamps a non-looping clip's into `[0, duration]`.

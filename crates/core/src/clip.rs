@@ -27,8 +27,13 @@
 
 use crate::compressed::{Quantized, QuantizedParts};
 use crate::skeleton::{JointIndex, Skeleton};
+use crate::soa::{self, PlanBlock};
 use crate::Transform;
 use glam::{Quat, Vec3};
+
+/// Zero floats kept after the last frame (of a clip, or of a sampler's decoded keys), so that the
+/// sampler can load any channel's floats four at a time.
+const FRAME_PAD: usize = 3;
 
 /// A keyed curve: strictly increasing times with one value each, linearly interpolated.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -163,6 +168,7 @@ pub struct Clip {
     stride: usize,
     frames: Vec<f32>,
     quantized: Option<Box<Quantized>>,
+    id: Identity,
 }
 
 fn check_curve<T>(joint: &str, c: &Curve<T>, finite: impl Fn(&T) -> bool) -> Result<(), ClipError> {
@@ -389,6 +395,8 @@ impl Clip {
                 return Err(ClipError::NonFinite(t.joint.clone()));
             }
         }
+        let mut frames = frames;
+        frames.extend([0.0; FRAME_PAD]);
         Ok(Clip {
             name,
             duration,
@@ -400,6 +408,7 @@ impl Clip {
             stride,
             frames,
             quantized: None,
+            id: Identity::new(),
         })
     }
 
@@ -512,8 +521,11 @@ impl Clip {
             });
         }
         let stride = stride as usize;
-        let mut frames = vec![0.0f32; stride * self.times.len()];
-        for (k, frame) in frames.chunks_exact_mut(stride.max(1)).enumerate() {
+        let mut frames = vec![0.0f32; stride * self.times.len() + FRAME_PAD];
+        for (k, frame) in frames[..stride * self.times.len()]
+            .chunks_exact_mut(stride.max(1))
+            .enumerate()
+        {
             let key = q.key(k);
             for (src, dst) in self.tracks.iter().zip(&tracks) {
                 if let (Channel::Animated(c), Channel::Animated(o)) =
@@ -537,6 +549,7 @@ impl Clip {
             stride,
             frames,
             quantized: None,
+            id: Identity::new(),
             ..self.clone()
         }
     }
@@ -575,7 +588,7 @@ impl Clip {
     }
     /// All frames, time-major: frame `k` is `frames[k * stride .. (k + 1) * stride]`.
     pub fn frames(&self) -> &[f32] {
-        &self.frames
+        &self.frames[..self.frames.len() - FRAME_PAD]
     }
     /// Returns a copy with another name.
     pub fn renamed(&self, name: impl Into<String>) -> Clip {
@@ -631,34 +644,148 @@ impl Clip {
     }
 }
 
+/// A process-unique identity for the sampler's key cache: clones share it (they hold the same data),
+/// and it takes no part in equality.
+#[derive(Debug, Clone, Copy)]
+struct Identity(u64);
+
+impl Identity {
+    fn new() -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        Identity(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+}
+
+impl PartialEq for Identity {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
 /// A clip bound to a skeleton: for each track, the joint it drives. Made once, reused every frame.
 ///
-/// Besides the joint of each track it holds the sampler's work lists: per channel kind (translation,
-/// rotation, scale) and source (bind value, constant, animated), the driven joints with their constant
-/// or their offset in a (decoded) frame, so the per-frame loops need no matching on channels.
+/// Besides the joint of each track it holds the sampler's *plan*: the blocks of four skeleton joints
+/// the clip drives (see [`crate::soa`]), per block and channel kind which lanes are animated and the
+/// values of the others (constants, bind values), and for every animated component of a driven joint
+/// where it sits in a (decoded) frame and where it goes in a block. Sampling then needs no per-joint
+/// matching and runs four joints per instruction.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ClipBinding {
     joint_of_track: Vec<Option<JointIndex>>,
     unmatched: Vec<String>,
     driven: Vec<JointIndex>,
     skeleton_len: usize,
-    /// Floats per frame of the layout the offsets below point into.
+    /// Floats per frame of the layout the plan's offsets point into.
     frame_stride: usize,
-    work: Work,
+    plan: Vec<PlanBlock>,
+    /// `(offset in a frame, float index in the plan's blocks)` for every animated component of a
+    /// driven joint, by offset.
+    gather: Vec<(u32, u32)>,
+    /// `gather` as the sampler loads keys: whole blocks by transposition where every driven joint of
+    /// the block has the same animated channels, single vectors elsewhere.
+    blocks: Vec<GatherBlock>,
+    vectors: Vec<GatherVector>,
+    id: Identity,
 }
 
-/// The sampler's per-binding work lists (joint indices as usize, offsets into a frame).
-#[derive(Debug, Clone, PartialEq, Default)]
-struct Work {
-    bind_t: Vec<usize>,
-    bind_r: Vec<usize>,
-    bind_s: Vec<usize>,
-    const_t: Vec<(usize, Vec3)>,
-    const_r: Vec<(usize, Quat)>,
-    const_s: Vec<(usize, Vec3)>,
-    anim_t: Vec<(usize, usize)>,
-    anim_r: Vec<(usize, usize)>,
-    anim_s: Vec<(usize, usize)>,
+/// A block of a key slot loaded by transposition: lane `l`'s animated floats are contiguous in a frame
+/// from `base[l]` (lanes of joints the clip does not drive borrow a driven lane's), and float `k` of
+/// every lane goes to block component `components[k]`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct GatherBlock {
+    /// Vector index of the block's first component inside a slot.
+    first: u32,
+    base: [u32; 4],
+    components: [u8; soa::COMPONENTS],
+    floats: u8,
+}
+
+/// Splits `gather` into whole blocks that load by transposition and the remaining vectors.
+fn gather_plan(plan: &[PlanBlock], gather: &[(u32, u32)]) -> (Vec<GatherBlock>, Vec<GatherVector>) {
+    let per_block = (soa::COMPONENTS * 4) as u32;
+    let mut moves: Vec<(u32, u32)> = gather.iter().map(|&(s, d)| (d, s)).collect();
+    moves.sort_unstable();
+    let mut blocks = Vec::new();
+    let mut rest = Vec::new();
+    let mut start = 0;
+    while start < moves.len() {
+        let pos = moves[start].0 / per_block;
+        let end = start + moves[start..].partition_point(|&(d, _)| d / per_block == pos);
+        let group = &moves[start..end];
+        start = end;
+        // Per lane: (component, source) in component order.
+        let mut lanes: [Vec<(u8, u32)>; 4] = Default::default();
+        for &(d, s) in group {
+            let within = d % per_block;
+            lanes[(within % 4) as usize].push(((within / 4) as u8, s));
+        }
+        let driven = plan.get(pos as usize).map_or(0, |pb| pb.driven);
+        let reference = lanes.iter().find(|l| !l.is_empty());
+        let whole = reference.is_some_and(|r| {
+            (0..4).all(|l| {
+                let lane = &lanes[l];
+                let same = lane.len() == r.len()
+                    && lane.iter().zip(r).all(|(a, b)| a.0 == b.0)
+                    && lane.windows(2).all(|w| w[1].1 == w[0].1 + 1);
+                same || (lane.is_empty() && driven & (1 << l) == 0)
+            })
+        });
+        match reference {
+            Some(r) if whole => {
+                let mut components = [0u8; soa::COMPONENTS];
+                for (k, &(c, _)) in r.iter().enumerate().take(soa::COMPONENTS) {
+                    components[k] = c;
+                }
+                let base = [0, 1, 2, 3].map(|l| lanes[l].first().unwrap_or(&r[0]).1);
+                blocks.push(GatherBlock {
+                    first: pos * soa::COMPONENTS as u32,
+                    base,
+                    components,
+                    floats: r.len().min(soa::COMPONENTS) as u8,
+                });
+            }
+            _ => rest.extend(gather_vectors(
+                &group.iter().map(|&(d, s)| (s, d)).collect::<Vec<_>>(),
+            )),
+        }
+    }
+    (blocks, rest)
+}
+
+/// One vector of a key slot that holds animated lanes: the frame offset of each lane (0 for lanes that
+/// keep their fixed value) and which lanes are animated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct GatherVector {
+    /// Vector index inside a slot.
+    dst: u32,
+    src: [u32; 4],
+    lanes: u8,
+}
+
+/// Groups `(src, dst)` float moves by destination vector (four floats), in destination order.
+fn gather_vectors(gather: &[(u32, u32)]) -> Vec<GatherVector> {
+    let mut by_dst: Vec<GatherVector> = Vec::new();
+    let mut moves: Vec<(u32, u32)> = gather.iter().map(|&(s, d)| (d, s)).collect();
+    moves.sort_unstable();
+    for (d, s) in moves {
+        let (vector, lane) = (d / 4, (d % 4) as usize);
+        match by_dst.last_mut() {
+            Some(v) if v.dst == vector => {
+                v.src[lane] = s;
+                v.lanes |= 1 << lane;
+            }
+            _ => {
+                let mut src = [0; 4];
+                src[lane] = s;
+                by_dst.push(GatherVector {
+                    dst: vector,
+                    src,
+                    lanes: 1 << lane,
+                });
+            }
+        }
+    }
+    by_dst
 }
 
 impl ClipBinding {
@@ -667,43 +794,165 @@ impl ClipBinding {
         let mut joint_of_track = Vec::with_capacity(clip.tracks.len());
         let mut unmatched = Vec::new();
         let mut driven = Vec::new();
-        let mut w = Work::default();
+        // Per skeleton block: the block being built (None until a driven joint falls in it).
+        let mut blocks: Vec<Option<PlanBlock>> = vec![None; soa::block_count(skeleton.len())];
+        // (frame offset, joint, component within the block) before blocks get their plan positions.
+        let mut gather: Vec<(usize, usize, usize)> = Vec::new();
+        let identity = Transform::IDENTITY;
         for t in &clip.tracks {
             let j = skeleton.find(&t.joint);
-            match j {
-                Some(j) => {
-                    driven.push(j);
-                    let ju = j as usize;
-                    match t.translation {
-                        Channel::Bind => w.bind_t.push(ju),
-                        Channel::Constant(v) => w.const_t.push((ju, v)),
-                        Channel::Animated(o) => w.anim_t.push((ju, clip.frame_offset(o))),
-                    }
+            joint_of_track.push(j);
+            let Some(j) = j else {
+                unmatched.push(t.joint.clone());
+                continue;
+            };
+            driven.push(j);
+            let ju = j as usize;
+            let (b, lane) = (ju / 4, ju % 4);
+            let Some(block) = blocks.get_mut(b) else {
+                continue;
+            };
+            let pb = block.get_or_insert_with(|| PlanBlock {
+                block: b,
+                driven: 0,
+                animated: [0; 3],
+                source: [soa::Source::Fixed; 3],
+                fixed: soa::from_transforms(&[identity; 4])
+                    .try_into()
+                    .unwrap_or([glam::Vec4::ZERO; soa::COMPONENTS]),
+            });
+            pb.driven |= 1 << lane;
+            let bind = if clip.additive {
+                identity
+            } else {
+                skeleton.bind_local().get(ju).copied().unwrap_or(identity)
+            };
+            let kinds: [(Option<u32>, [f32; 4], usize, usize); 3] = [
+                (
+                    animated(t.translation),
+                    fixed3(t.translation, bind.translation),
+                    soa::T,
+                    3,
+                ),
+                (
+                    animated(t.rotation),
                     match t.rotation {
-                        Channel::Bind => w.bind_r.push(ju),
-                        Channel::Constant(q) => w.const_r.push((ju, q)),
-                        Channel::Animated(o) => w.anim_r.push((ju, clip.frame_offset(o))),
-                    }
-                    match t.scale {
-                        Channel::Bind => w.bind_s.push(ju),
-                        Channel::Constant(v) => w.const_s.push((ju, v)),
-                        Channel::Animated(o) => w.anim_s.push((ju, clip.frame_offset(o))),
+                        Channel::Constant(q) => q.to_array(),
+                        _ => bind.rotation.to_array(),
+                    },
+                    soa::R,
+                    4,
+                ),
+                (animated(t.scale), fixed3(t.scale, bind.scale), soa::S, 3),
+            ];
+            for (kind, (anim, fixed, first, n)) in kinds.into_iter().enumerate() {
+                for (c, &v) in fixed.iter().enumerate().take(n) {
+                    pb.fixed[first + c][lane] = v;
+                }
+                if let Some(o) = anim {
+                    pb.animated[kind] |= 1 << lane;
+                    let at = clip.frame_offset(o);
+                    for c in 0..n {
+                        gather.push((at.saturating_add(c), ju, first + c));
                     }
                 }
-                None => unmatched.push(t.joint.clone()),
             }
-            joint_of_track.push(j);
         }
         driven.sort_unstable();
+        let mut position = vec![usize::MAX; blocks.len()];
+        let mut plan = Vec::new();
+        for (b, block) in blocks.into_iter().enumerate() {
+            if let Some(mut pb) = block {
+                pb.set_sources();
+                position[b] = plan.len();
+                plan.push(pb);
+            }
+        }
+        let mut gather: Vec<(u32, u32)> = gather
+            .into_iter()
+            .filter_map(|(src, j, c)| {
+                let pos = *position.get(j / 4)?;
+                let dst = (pos * soa::COMPONENTS + c) * 4 + j % 4;
+                Some((u32::try_from(src).ok()?, u32::try_from(dst).ok()?))
+            })
+            .collect();
+        gather.sort_unstable();
+        let (blocks, vectors) = gather_plan(&plan, &gather);
         ClipBinding {
             joint_of_track,
             unmatched,
             driven,
             skeleton_len: skeleton.len(),
             frame_stride: clip.frame_stride(),
-            work: w,
+            blocks,
+            vectors,
+            plan,
+            gather,
+            id: Identity::new(),
         }
     }
+
+    /// The same binding with every channel of the joints `keep` rejects left out: those joints are
+    /// neither sampled nor listed in [`ClipBinding::driven`]. The [`crate::Animator`] samples a masked
+    /// layer through such a binding (joints whose mask is zero), so a partial-body layer costs only the
+    /// joints it reaches. Track-to-joint mapping and unmatched names are those of `self`.
+    pub fn restricted(&self, mut keep: impl FnMut(JointIndex) -> bool) -> ClipBinding {
+        let mut keep = |j: usize| keep(j as JointIndex);
+        let identity = soa::from_transforms(&[Transform::IDENTITY]);
+        let mut position = vec![usize::MAX; self.plan.len()];
+        let mut plan = Vec::new();
+        for (i, pb) in self.plan.iter().enumerate() {
+            let mut pb = pb.clone();
+            for lane in 0..4 {
+                if pb.driven & (1 << lane) != 0 && !keep(pb.block * 4 + lane) {
+                    pb.driven &= !(1 << lane);
+                    for k in &mut pb.animated {
+                        *k &= !(1 << lane);
+                    }
+                    // Lanes nobody reads still hold finite values (the identity).
+                    for (c, v) in identity.iter().enumerate().take(soa::COMPONENTS) {
+                        pb.fixed[c][lane] = v[0];
+                    }
+                }
+            }
+            if pb.driven != 0 {
+                pb.set_sources();
+                position[i] = plan.len();
+                plan.push(pb);
+            }
+        }
+        let block_floats = soa::COMPONENTS * 4;
+        let gather: Vec<(u32, u32)> = self
+            .gather
+            .iter()
+            .filter_map(|&(src, dst)| {
+                let (old, within) = (dst as usize / block_floats, dst as usize % block_floats);
+                let pos = *position.get(old)?;
+                let pb = plan.get(pos)?;
+                (pb.driven & (1 << (within % 4)) != 0)
+                    .then(|| (src, (pos * block_floats + within) as u32))
+            })
+            .collect();
+        let (blocks, vectors) = gather_plan(&plan, &gather);
+        ClipBinding {
+            joint_of_track: self.joint_of_track.clone(),
+            unmatched: self.unmatched.clone(),
+            driven: self
+                .driven
+                .iter()
+                .copied()
+                .filter(|&j| keep(j as usize))
+                .collect(),
+            skeleton_len: self.skeleton_len,
+            frame_stride: self.frame_stride,
+            blocks,
+            vectors,
+            plan,
+            gather,
+            id: Identity::new(),
+        }
+    }
+
     /// The clip's track names that matched no joint.
     pub fn unmatched(&self) -> &[String] {
         &self.unmatched
@@ -716,18 +965,32 @@ impl ClipBinding {
     pub fn joint_of_track(&self) -> &[Option<JointIndex>] {
         &self.joint_of_track
     }
+    /// The blocks of four joints this binding samples, ascending.
+    pub(crate) fn plan(&self) -> &[PlanBlock] {
+        &self.plan
+    }
+}
+
+/// The fixed value of a translation or scale channel: its constant, or `bind` (padded to four).
+fn fixed3(c: Channel<Vec3>, bind: Vec3) -> [f32; 4] {
+    let v = match c {
+        Channel::Constant(v) => v,
+        _ => bind,
+    };
+    [v.x, v.y, v.z, 0.0]
 }
 
 /// Per-character sampling state: a cursor into a clip's key times so that playing forward never searches
-/// from the first key, and for compressed clips the two most recently used keys decoded to f32 (made on
-/// first use for a clip and reused, so playing forward decodes a key only when the cursor passes it).
+/// from the first key, and the two most recently used keys laid out as the binding's blocks (made on
+/// first use for a clip and binding and reused, so playing forward gathers or decodes a key only when
+/// the cursor passes it).
 #[derive(Debug, Clone, Default)]
 pub struct Sampler {
     cursor: usize,
     cache: KeyCache,
 }
 
-/// Equality compares the cursor only: the decoded-key cache is a memo that never changes results.
+/// Equality compares the cursor only: the key cache is a memo that never changes results.
 impl PartialEq for Sampler {
     fn eq(&self, other: &Self) -> bool {
         self.cursor == other.cursor
@@ -735,26 +998,40 @@ impl PartialEq for Sampler {
 }
 impl Eq for Sampler {}
 
-/// Two decoded keys of one compressed clip.
+/// Two keys of one clip, in one binding's block layout.
 #[derive(Debug, Clone, Default)]
 struct KeyCache {
-    /// [`Quantized::id`] of the clip the frames belong to; 0 = none.
-    id: u64,
+    /// Identities of the clip and binding the slots belong to.
+    owner: Option<(u64, u64)>,
     /// The key held by each slot (`usize::MAX` = empty).
     keys: [usize; 2],
-    /// Two decoded keys of `decoded_stride` floats each.
-    frames: Vec<f32>,
+    /// Two slots of `plan.len() * COMPONENTS` vectors: fixed values, animated lanes from the key.
+    slots: Vec<glam::Vec4>,
+    /// A compressed key decoded in its frame layout, before it is gathered into a slot.
+    decoded: Vec<f32>,
 }
 
 impl KeyCache {
-    /// The slots holding keys `k0` and `k1`, decoding whichever is missing.
-    fn slots(&mut self, q: &Quantized, k0: usize, k1: usize) -> (usize, usize) {
-        let stride = q.decoded_stride;
-        if self.id != q.id || self.frames.len() != 2 * stride {
-            self.id = q.id;
+    /// The slots holding keys `k0` and `k1`, loading whichever is missing.
+    #[inline(always)]
+    fn slots(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        k0: usize,
+        k1: usize,
+    ) -> (usize, usize) {
+        let len = binding.plan.len() * soa::COMPONENTS;
+        let owner = Some((clip.id.0, binding.id.0));
+        if self.owner != owner || self.slots.len() != 2 * len {
+            self.owner = owner;
             self.keys = [usize::MAX; 2];
-            self.frames.clear();
-            self.frames.resize(2 * stride, 0.0);
+            self.slots.clear();
+            for _ in 0..2 {
+                for pb in &binding.plan {
+                    self.slots.extend_from_slice(&pb.fixed);
+                }
+            }
         }
         let find = |k: usize| self.keys.iter().position(|&x| x == k);
         let (s0, s1) = match (find(k0), find(k1)) {
@@ -765,11 +1042,75 @@ impl KeyCache {
         };
         for (slot, k) in [(s0, k0), (s1, k1)] {
             if self.keys[slot] != k {
-                q.decode_into(k, &mut self.frames[slot * stride..(slot + 1) * stride]);
+                self.load(clip, binding, k, slot * len);
                 self.keys[slot] = k;
             }
         }
         (s0, s1)
+    }
+
+    /// Gathers key `k`'s animated components into the slot starting at vector `base`.
+    #[inline(always)]
+    fn load(&mut self, clip: &Clip, binding: &ClipBinding, k: usize, base: usize) {
+        let frame: &[f32] = match &clip.quantized {
+            None => {
+                // The frame and the floats after it (the next frame or the padding): runs are read
+                // four floats at a time.
+                let s = clip.stride;
+                clip.frames
+                    .get(k * s..(k + 1) * s + FRAME_PAD)
+                    .unwrap_or_default()
+            }
+            Some(q) => {
+                self.decoded.resize(q.decoded_stride + FRAME_PAD, 0.0);
+                q.decode_into(k, &mut self.decoded);
+                &self.decoded
+            }
+        };
+        // Whole vectors are built in registers and stored once (scalar stores into a vector that is
+        // read right after would defeat store-to-load forwarding).
+        let slots = &mut self.slots;
+        let row = |i: usize| {
+            frame
+                .get(i..i + 4)
+                .map_or(glam::Vec4::ZERO, glam::Vec4::from_slice)
+        };
+        for g in &binding.blocks {
+            let first = base + g.first as usize;
+            let Some(Ok(block)) = slots
+                .get_mut(first..first + soa::COMPONENTS)
+                .map(<&mut soa::Block>::try_from)
+            else {
+                continue;
+            };
+            let [b0, b1, b2, b3] = g.base.map(|b| b as usize);
+            for k in (0..g.floats as usize).step_by(4) {
+                // Four floats of each lane's run, transposed into one vector per component.
+                let t = glam::Mat4::from_cols(row(b0 + k), row(b1 + k), row(b2 + k), row(b3 + k))
+                    .transpose();
+                for (i, v) in [t.x_axis, t.y_axis, t.z_axis, t.w_axis]
+                    .into_iter()
+                    .enumerate()
+                {
+                    if k + i < g.floats as usize {
+                        if let Some(slot) = block.get_mut(g.components[k + i] as usize) {
+                            *slot = v;
+                        }
+                    }
+                }
+            }
+        }
+        let f = |i: u32| frame.get(i as usize).copied().unwrap_or(0.0);
+        for g in &binding.vectors {
+            if let Some(slot) = slots.get_mut(base + g.dst as usize) {
+                let v = glam::Vec4::new(f(g.src[0]), f(g.src[1]), f(g.src[2]), f(g.src[3]));
+                *slot = if g.lanes == 0b1111 {
+                    v
+                } else {
+                    glam::Vec4::select(soa::lanes(g.lanes), v, *slot)
+                };
+            }
+        }
     }
 }
 
@@ -842,137 +1183,76 @@ impl Sampler {
                 got: out.len(),
             });
         }
+        if binding.skeleton_len != skeleton.len() {
+            return Err(ClipError::BindingMismatch);
+        }
+        self.sample_each(clip, binding, t, |pb, block| {
+            soa::write_transforms(
+                block,
+                pb.driven,
+                out.get_mut(pb.block * 4..).unwrap_or_default(),
+            );
+        })
+    }
+
+    /// Samples the clip at playback time `t` into `out`, one block of [`soa::COMPONENTS`] vectors per
+    /// block of the binding's plan (`out` is resized to that). Lanes of joints the clip does not drive
+    /// hold unspecified finite values.
+    #[inline(always)]
+    pub(crate) fn sample_blocks(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        t: f32,
+        out: &mut Vec<glam::Vec4>,
+    ) -> Result<(), ClipError> {
+        let len = binding.plan.len() * soa::COMPONENTS;
+        if out.len() != len {
+            out.resize(len, glam::Vec4::ZERO);
+        }
+        let mut blocks = out.chunks_exact_mut(soa::COMPONENTS);
+        self.sample_each(clip, binding, t, |_, block| {
+            if let Some(o) = blocks.next() {
+                o.copy_from_slice(block);
+            }
+        })
+    }
+
+    /// Samples the clip at playback time `t` block by block, handing each block of the binding's plan
+    /// to `f` as it is made (in plan order). Lanes of joints the clip does not drive hold unspecified
+    /// finite values.
+    #[inline(always)]
+    pub(crate) fn sample_each(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        t: f32,
+        mut f: impl FnMut(&PlanBlock, &soa::Block),
+    ) -> Result<(), ClipError> {
         if binding.joint_of_track.len() != clip.tracks.len()
-            || binding.skeleton_len != skeleton.len()
+            || binding.frame_stride != clip.frame_stride()
         {
             return Err(ClipError::BindingMismatch);
         }
-        if binding.frame_stride != clip.frame_stride() {
-            return Err(ClipError::BindingMismatch);
-        }
+        let len = binding.plan.len() * soa::COMPONENTS;
         let t = clip.local_time(t);
         let (k0, k1, a) = self.locate(clip, t);
-        let bind = skeleton.bind_local();
-        let (f0, f1) = match &clip.quantized {
-            None => {
-                let s = clip.stride;
-                (
-                    &clip.frames[k0 * s..(k0 + 1) * s],
-                    &clip.frames[k1 * s..(k1 + 1) * s],
-                )
-            }
-            Some(q) => {
-                let (s0, s1) = self.cache.slots(q, k0, k1);
-                let s = q.decoded_stride;
-                let frames = &self.cache.frames;
-                (&frames[s0 * s..(s0 + 1) * s], &frames[s1 * s..(s1 + 1) * s])
-            }
-        };
-        sample_frames(
-            &binding.work,
-            clip.additive,
-            clip.quantized.is_some(),
-            bind,
-            (f0, f1, a),
-            out,
+        let (s0, s1) = self.cache.slots(clip, binding, k0, k1);
+        let slots = &self.cache.slots;
+        let (c0, c1) = (
+            slots.get(s0 * len..(s0 + 1) * len).unwrap_or_default(),
+            slots.get(s1 * len..(s1 + 1) * len).unwrap_or_default(),
         );
+        let raw = clip.quantized.is_some();
+        let blocks = c0
+            .chunks_exact(soa::COMPONENTS)
+            .zip(c1.chunks_exact(soa::COMPONENTS));
+        for (pb, (b0, b1)) in binding.plan.iter().zip(blocks) {
+            if let (Ok(b0), Ok(b1)) = (<&soa::Block>::try_from(b0), <&soa::Block>::try_from(b1)) {
+                f(pb, &soa::sample_block(pb, b0, b1, a, raw));
+            }
+        }
         Ok(())
-    }
-}
-
-/// The per-frame loops: bind and constant channels first, then each animated channel kind over its
-/// offsets. `raw_rotations`: the frames hold unnormalised rotations (decoded compressed keys), which
-/// are normalised also at `a == 0`.
-fn sample_frames(
-    w: &Work,
-    additive: bool,
-    raw_rotations: bool,
-    bind: &[Transform],
-    (f0, f1, a): (&[f32], &[f32], f32),
-    out: &mut [Transform],
-) {
-    if additive {
-        for &j in &w.bind_t {
-            if let Some(o) = out.get_mut(j) {
-                o.translation = Vec3::ZERO;
-            }
-        }
-        for &j in &w.bind_r {
-            if let Some(o) = out.get_mut(j) {
-                o.rotation = Quat::IDENTITY;
-            }
-        }
-        for &j in &w.bind_s {
-            if let Some(o) = out.get_mut(j) {
-                o.scale = Vec3::ONE;
-            }
-        }
-    } else {
-        for &j in &w.bind_t {
-            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
-                o.translation = b.translation;
-            }
-        }
-        for &j in &w.bind_r {
-            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
-                o.rotation = b.rotation;
-            }
-        }
-        for &j in &w.bind_s {
-            if let (Some(o), Some(b)) = (out.get_mut(j), bind.get(j)) {
-                o.scale = b.scale;
-            }
-        }
-    }
-    for &(j, v) in &w.const_t {
-        if let Some(o) = out.get_mut(j) {
-            o.translation = v;
-        }
-    }
-    for &(j, q) in &w.const_r {
-        if let Some(o) = out.get_mut(j) {
-            o.rotation = q;
-        }
-    }
-    for &(j, v) in &w.const_s {
-        if let Some(o) = out.get_mut(j) {
-            o.scale = v;
-        }
-    }
-    let vec3 = |f: &[f32], o: usize| f.get(o..o + 3).map(Vec3::from_slice);
-    let quat = |f: &[f32], o: usize| f.get(o..o + 4).map(Quat::from_slice);
-    if a == 0.0 {
-        for &(j, o) in &w.anim_t {
-            if let (Some(slot), Some(v)) = (out.get_mut(j), vec3(f0, o)) {
-                slot.translation = v;
-            }
-        }
-        for &(j, o) in &w.anim_s {
-            if let (Some(slot), Some(v)) = (out.get_mut(j), vec3(f0, o)) {
-                slot.scale = v;
-            }
-        }
-        for &(j, o) in &w.anim_r {
-            if let (Some(slot), Some(q)) = (out.get_mut(j), quat(f0, o)) {
-                slot.rotation = if raw_rotations { q.normalize() } else { q };
-            }
-        }
-    } else {
-        for &(j, o) in &w.anim_t {
-            if let (Some(slot), Some(v0), Some(v1)) = (out.get_mut(j), vec3(f0, o), vec3(f1, o)) {
-                slot.translation = v0.lerp(v1, a);
-            }
-        }
-        for &(j, o) in &w.anim_s {
-            if let (Some(slot), Some(v0), Some(v1)) = (out.get_mut(j), vec3(f0, o), vec3(f1, o)) {
-                slot.scale = v0.lerp(v1, a);
-            }
-        }
-        for &(j, o) in &w.anim_r {
-            if let (Some(slot), Some(q0), Some(q1)) = (out.get_mut(j), quat(f0, o), quat(f1, o)) {
-                slot.rotation = nlerp(q0, q1, a);
-            }
-        }
     }
 }
 
@@ -1362,6 +1642,44 @@ mod tests {
     fn work_lists_and_key_cache_match_the_reference_bit_for_bit() {
         let sk = skeleton();
         let mut clips = vec![walk(false), walk(true)];
+        // Both joints animate translation and rotation (one block loads by transposition), in either
+        // track order, so that each joint's run ends the frame once; and with scale too.
+        for names in [["root", "arm"], ["arm", "root"]] {
+            for with_scale in [false, true] {
+                let times = vec![0.0, 0.3, 0.45, 1.0];
+                let tracks = names
+                    .iter()
+                    .enumerate()
+                    .map(|(i, n)| {
+                        let f = i as f32 + 1.0;
+                        let scale = if with_scale {
+                            Curve::new(
+                                times.clone(),
+                                times.iter().map(|&t| Vec3::splat(1.0 + t * f)).collect(),
+                            )
+                        } else {
+                            Curve::default()
+                        };
+                        TrackCurves {
+                            joint: (*n).into(),
+                            translation: Curve::new(
+                                times.clone(),
+                                times.iter().map(|&t| Vec3::new(t, -f * t, 2.0)).collect(),
+                            ),
+                            rotation: Curve::new(
+                                times.clone(),
+                                times
+                                    .iter()
+                                    .map(|&t| Quat::from_rotation_y(t * f * 2.0))
+                                    .collect(),
+                            ),
+                            scale,
+                        }
+                    })
+                    .collect();
+                clips.push(Clip::from_curves("uniform", 1.0, 4.0, true, false, tracks).unwrap());
+            }
+        }
         for (l, a) in [(false, false), (true, false), (false, true)] {
             let c = compressed(l, a);
             clips.push(c.to_plain());
@@ -1409,13 +1727,17 @@ mod tests {
         s.sample(&c, &b, &sk, 0.3, &mut out).unwrap();
         // Key 1 stays in its slot; key 2 replaces key 0.
         assert_eq!(s.cache.keys, [2, 1]);
-        let q = c.quantized.as_deref().unwrap();
-        assert_eq!(s.cache.id, q.id);
+        assert_eq!(s.cache.owner, Some((c.id.0, b.id.0)));
         // Another clip (same layout, new payload) invalidates the cache.
         let other = compressed(false, false);
-        s.sample(&other, &ClipBinding::new(&other, &sk), &sk, 0.3, &mut out)
-            .unwrap();
-        assert_ne!(s.cache.id, q.id);
+        let ob = ClipBinding::new(&other, &sk);
+        s.sample(&other, &ob, &sk, 0.3, &mut out).unwrap();
+        assert_eq!(s.cache.owner, Some((other.id.0, ob.id.0)));
+        assert_ne!(other.id.0, c.id.0);
         assert_eq!(s.cache.keys, [1, 2]);
+        // So does another binding of the same clip (a restricted one has its own plan).
+        let half = b.restricted(|j| j == 0);
+        s.sample(&c, &half, &sk, 0.3, &mut out).unwrap();
+        assert_eq!(s.cache.owner, Some((c.id.0, half.id.0)));
     }
 }

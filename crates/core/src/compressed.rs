@@ -63,9 +63,6 @@ pub(crate) struct Dec {
 pub(crate) struct Quantized {
     pub(crate) parts: QuantizedParts,
     pub(crate) components: usize,
-    /// Process-unique identity of this payload (clones share it: same data), so that a
-    /// [`crate::Sampler`]'s decoded-key cache knows when the clip changed. Not part of equality.
-    pub(crate) id: u64,
     /// Floats per decoded key: 3 per translation or scale, 4 per rotation (raw x y z w), in component
     /// order (the layout [`crate::Clip::to_plain`] gives its frames).
     pub(crate) decoded_stride: usize,
@@ -87,9 +84,6 @@ impl PartialEq for Quantized {
         self.parts == other.parts && self.group_rot == other.group_rot
     }
 }
-
-/// Source of [`Quantized::id`]; 0 is never handed out.
-static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 /// The scale and bias a component decodes with: `value = bias + scale * q`.
 pub fn dequant_params(range: [f32; 2], seg: SegmentComponent) -> (f32, f32) {
@@ -293,7 +287,6 @@ impl Quantized {
             decoded_stride += if rot { 4 } else { 3 };
         }
         Ok(Quantized {
-            id: NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             decoded_stride,
             group_dest,
             group_rot,

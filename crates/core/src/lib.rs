@@ -16,10 +16,12 @@ pub mod animator;
 pub mod blend;
 pub mod clip;
 pub mod compressed;
+mod cpu;
 pub mod format;
 pub mod mesh;
 pub mod skeleton;
 pub mod skinning;
+mod soa;
 pub mod transform;
 
 pub use animator::{Animator, AnimatorError, ClipId};

@@ -65,6 +65,10 @@ pub struct Skeleton {
     bind_local: Vec<Transform>,
     inverse_bind: Vec<Mat4>,
     by_name: HashMap<String, JointIndex>,
+    /// `bind_local` as blocks of four joints (see [`crate::soa`]), for the blend.
+    bind_blocks: Vec<glam::Vec4>,
+    /// [`crate::skinning::level_order`] of `parents`.
+    level_order: Vec<JointIndex>,
 }
 
 impl Skeleton {
@@ -184,12 +188,24 @@ impl Skeleton {
             }
         }
         Ok(Skeleton {
+            bind_blocks: crate::soa::from_transforms(&bind_local),
+            level_order: crate::skinning::level_order(&parents),
             names,
             parents,
             bind_local,
             inverse_bind,
             by_name,
         })
+    }
+
+    /// The joints level by level (see [`crate::skinning::level_order`]).
+    pub(crate) fn level_order(&self) -> &[JointIndex] {
+        &self.level_order
+    }
+
+    /// The bind pose as blocks of four joints.
+    pub(crate) fn bind_blocks(&self) -> &[glam::Vec4] {
+        &self.bind_blocks
     }
 
     /// Number of joints.

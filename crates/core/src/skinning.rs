@@ -9,9 +9,10 @@
 //! [`SkinError`], never a panic. On a joint-index error [`skin`] has already written the vertices before
 //! the offending one; all other errors are reported before anything is written.
 
+use crate::cpu::multiversion;
 use crate::skeleton::JointIndex;
-use crate::{Lod, Transform, MAX_INFLUENCES};
-use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4, Vec4Swizzles};
+use crate::{soa, Lod, Transform, MAX_INFLUENCES};
+use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4};
 
 /// Why a skinning step was refused.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -62,9 +63,10 @@ fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinE
 /// or `locals[i].to_mat4()` for a root. Parents must come before their children (as in a
 /// [`Skeleton`](crate::Skeleton)).
 ///
-/// The product is the affine (3x4) one: it skips the terms that multiply the local matrix's zero
-/// bottom row, so for affine matrices the result is the full product's up to rounding (the rotation
-/// is multiplied into the parent before the scale is applied). Same bits as
+/// Joints are taken four at a time: their local matrices `T * R * S` are built together, one joint per
+/// SIMD lane (see [`local_matrices`]), then each joint's model matrix is its parent's times its local
+/// matrix, as the affine (3x4) product: it skips the terms that multiply the local matrix's zero bottom
+/// row, so for affine matrices the result is the full product's up to rounding. Same bits as
 /// [`local_to_model_and_palette`]'s `models`.
 pub fn local_to_model(
     parents: &[Option<JointIndex>],
@@ -75,17 +77,31 @@ pub fn local_to_model(
     same_len("locals", n, locals.len())?;
     same_len("models", n, models.len())?;
     check_parents(parents)?;
-    for i in 0..n {
-        let m = model_of(parents, models, i, &locals[i]);
-        models[i] = m;
+    for (b, four) in locals.chunks(4).enumerate() {
+        let local = local_matrices(&soa::block_of(four));
+        for lane in 0..four.len() {
+            let i = b * 4 + lane;
+            models[i] = model_of(parents, models, i, &local, lane);
+        }
     }
     Ok(())
 }
 
-/// [`local_to_model`] and [`skinning_palette`] in one pass over the joints (the model matrix is still
-/// in registers when the palette entry is made). The results are bit-identical to calling the two
-/// functions one after the other.
-pub fn local_to_model_and_palette(
+multiversion! {
+    /// [`local_to_model`] and [`skinning_palette`] in one pass over the joints (the model matrix is still
+    /// in registers when the palette entry is made). The results are bit-identical to calling the two
+    /// functions one after the other.
+    pub fn local_to_model_and_palette(
+        parents: &[Option<JointIndex>],
+        locals: &[Transform],
+        inverse_bind: &[Mat4],
+        models: &mut [Mat4],
+        palette: &mut [Mat4],
+    ) -> Result<(), SkinError> => local_to_model_and_palette_generic;
+}
+
+#[inline(always)]
+fn local_to_model_and_palette_generic(
     parents: &[Option<JointIndex>],
     locals: &[Transform],
     inverse_bind: &[Mat4],
@@ -98,13 +114,105 @@ pub fn local_to_model_and_palette(
     same_len("inverse bind matrices", n, inverse_bind.len())?;
     same_len("palette", n, palette.len())?;
     check_parents(parents)?;
-    let (inverse_bind, palette) = (&inverse_bind[..n], &mut palette[..n]);
-    for i in 0..n {
-        let m = model_of(parents, models, i, &locals[i]);
+    for (b, four) in locals.chunks(4).enumerate() {
+        let local = local_matrices(&soa::block_of(four));
+        for lane in 0..four.len() {
+            let i = b * 4 + lane;
+            let m = model_of(parents, models, i, &local, lane);
+            models[i] = m;
+            palette[i] = mul_affine(&m, &inverse_bind[i]);
+        }
+    }
+    Ok(())
+}
+
+multiversion! {
+    /// [`local_to_model_and_palette`] reading the local pose from blocks of four joints (see
+    /// [`crate::soa`]; joint `i` is lane `i % 4` of block `i / 4`). Same arithmetic, same bits.
+    ///
+    /// `parents` must be a [`crate::Skeleton`]'s (every parent before its child; not checked again
+    /// here, once per frame). All local matrices are built first (into `scratch`), then the joints are
+    /// visited in `order`, which must list every joint once, after its parent: the skeleton's
+    /// [`level_order`], which puts
+    /// a joint's dependants a whole level of the skeleton later, so the CPU can overlap independent
+    /// joints instead of waiting on each parent. (Indices are checked, so a wrong order gives wrong
+    /// matrices, never a panic.)
+    pub(crate) fn local_to_model_and_palette_blocks(
+        parents: &[Option<JointIndex>],
+        order: &[JointIndex],
+        blocks: &[Vec4],
+        inverse_bind: &[Mat4],
+        scratch: &mut Vec<f32>,
+        models: &mut [Mat4],
+        palette: &mut [Mat4],
+    ) -> Result<(), SkinError> => local_to_model_and_palette_blocks_generic;
+}
+
+#[inline(always)]
+fn local_to_model_and_palette_blocks_generic(
+    parents: &[Option<JointIndex>],
+    order: &[JointIndex],
+    blocks: &[Vec4],
+    inverse_bind: &[Mat4],
+    scratch: &mut Vec<f32>,
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) -> Result<(), SkinError> {
+    let n = parents.len();
+    same_len(
+        "local blocks",
+        soa::block_count(n) * soa::COMPONENTS,
+        blocks.len(),
+    )?;
+    same_len("models", n, models.len())?;
+    same_len("inverse bind matrices", n, inverse_bind.len())?;
+    same_len("palette", n, palette.len())?;
+    same_len("joint order", n, order.len())?;
+    scratch.resize(soa::block_count(n) * LOCAL, 0.0);
+    for (block, local) in blocks
+        .chunks_exact(soa::COMPONENTS)
+        .zip(scratch.chunks_exact_mut(LOCAL))
+    {
+        if let (Ok(block), Ok(local)) = (
+            <&soa::Block>::try_from(block),
+            <&mut [f32; LOCAL]>::try_from(local),
+        ) {
+            *local = local_matrices(block);
+        }
+    }
+    for &i in order {
+        let i = i as usize;
+        let Some(Ok(local)) = scratch
+            .get((i / 4) * LOCAL..(i / 4 + 1) * LOCAL)
+            .map(<&[f32; LOCAL]>::try_from)
+        else {
+            continue;
+        };
+        if i >= n {
+            continue;
+        }
+        let m = model_of(parents, models, i, local, i % 4);
         models[i] = m;
         palette[i] = mul_affine(&m, &inverse_bind[i]);
     }
     Ok(())
+}
+
+/// Floats of [`local_matrices`] per block of four joints.
+const LOCAL: usize = 48;
+
+/// The joints level by level (roots, then their children, ...), by index within a level: an order in
+/// which every joint comes after its parent and joints that depend on each other are far apart.
+pub(crate) fn level_order(parents: &[Option<JointIndex>]) -> Vec<JointIndex> {
+    let mut depth = vec![0u32; parents.len()];
+    for (i, p) in parents.iter().enumerate() {
+        if let Some(p) = p.map(usize::from).filter(|&p| p < i) {
+            depth[i] = depth[p] + 1;
+        }
+    }
+    let mut order: Vec<JointIndex> = (0..parents.len() as JointIndex).collect();
+    order.sort_by_key(|&j| (depth[j as usize], j));
+    order
 }
 
 fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
@@ -121,43 +229,58 @@ fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
     Ok(())
 }
 
-/// Joint `i`'s model matrix from its parent's (already in `models`, checked to come before `i`).
+/// The local matrices `T * R * S` of four joints (one per lane), as twelve component vectors: entry
+/// `3 * c + r` is row `r` of column `c` (columns 0-2: the rotation's columns times the scale, column
+/// 3: the translation). The rotation uses glam's `Mat3A::from_quat` formulas; column `c` is multiplied
+/// by scale component `c`.
 #[inline(always)]
-fn model_of(parents: &[Option<JointIndex>], models: &[Mat4], i: usize, local: &Transform) -> Mat4 {
-    match parents[i] {
-        Some(p) => mul_srt(&models[p as usize], local),
-        None => mul_srt(&Mat4::IDENTITY, local),
-    }
-}
-
-/// `parent * local.to_mat4()` for an affine `parent` (bottom row `0 0 0 1`), without the terms that
-/// multiply the local matrix's zero bottom row.
-///
-/// The rotation matrix is built directly in "splat" form (every entry broadcast to the four lanes of
-/// a SIMD register, with the same scalar formulas as glam's `Mat3A::from_quat`), so the product with
-/// the parent's columns needs no further shuffles: `column_i = (px*r0i + py*r1i + pz*r2i) * s_i`.
-#[inline(always)]
-fn mul_srt(parent: &Mat4, local: &Transform) -> Mat4 {
-    let q = Vec4::from(local.rotation);
-    let (x, y, z, w) = (q.xxxx(), q.yyyy(), q.zzzz(), q.wwww());
+fn local_matrices(block: &soa::Block) -> [f32; LOCAL] {
+    let [x, y, z, w] = soa::rotation(block);
     let (x2, y2, z2) = (x + x, y + y, z + z);
     let (xx, xy, xz) = (x * x2, x * y2, x * z2);
     let (yy, yz, zz) = (y * y2, y * z2, z * z2);
     let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    let (sx, sy, sz) = (block[soa::S], block[soa::S + 1], block[soa::S + 2]);
     let one = Vec4::ONE;
+    let entries = [
+        (one - (yy + zz)) * sx,
+        (xy + wz) * sx,
+        (xz - wy) * sx,
+        (xy - wz) * sy,
+        (one - (xx + zz)) * sy,
+        (yz + wx) * sy,
+        (xz + wy) * sz,
+        (yz - wx) * sz,
+        (one - (xx + yy)) * sz,
+        block[soa::T],
+        block[soa::T + 1],
+        block[soa::T + 2],
+    ];
+    let mut out = [0.0; LOCAL];
+    for (e, v) in entries.iter().enumerate() {
+        out[e * 4..e * 4 + 4].copy_from_slice(&v.to_array());
+    }
+    out
+}
+
+/// Joint `i`'s model matrix: its parent's (already in `models`, checked to come before `i`; the
+/// identity for a root) times its local matrix, lane `lane` of `local` (see [`local_matrices`]).
+#[inline(always)]
+fn model_of(
+    parents: &[Option<JointIndex>],
+    models: &[Mat4],
+    i: usize,
+    local: &[f32; LOCAL],
+    lane: usize,
+) -> Mat4 {
+    let parent = match parents[i] {
+        Some(p) => models.get(p as usize).unwrap_or(&Mat4::IDENTITY),
+        None => &Mat4::IDENTITY,
+    };
     let (px, py, pz, pw) = (parent.x_axis, parent.y_axis, parent.z_axis, parent.w_axis);
-    let s = local.scale;
-    let t = local.translation;
-    // Column i of R is (r0i, r1i, r2i).
-    let c0 = px * (one - (yy + zz)) + py * (xy + wz) + pz * (xz - wy);
-    let c1 = px * (xy - wz) + py * (one - (xx + zz)) + pz * (yz + wx);
-    let c2 = px * (xz + wy) + py * (yz - wx) + pz * (one - (xx + yy));
-    Mat4::from_cols(
-        c0 * s.x,
-        c1 * s.y,
-        c2 * s.z,
-        px * t.x + py * t.y + pz * t.z + pw,
-    )
+    let e = |k: usize| local[k * 4 + (lane & 3)];
+    let column = |c: usize| px * e(3 * c) + py * e(3 * c + 1) + pz * e(3 * c + 2);
+    Mat4::from_cols(column(0), column(1), column(2), column(3) + pw)
 }
 
 /// The skinning palette: `palette[i] = models[i] * inverse_bind[i]`, which moves a bind-pose
@@ -190,26 +313,39 @@ fn mul_affine(a: &Mat4, b: &Mat4) -> Mat4 {
     )
 }
 
-/// Linear blend skinning of positions and normals with four influences per vertex.
-///
-/// For vertex `v` with joints `j` and weights `w`, the blended matrix is, column by column and in this
-/// order, `((P[j0]*w0 + P[j1]*w1) + P[j2]*w2) + P[j3]*w3` (only the upper 3x4 part is used; the palette's
-/// bottom row is assumed to be `0 0 0 1`).
-///
-/// - **Positions**: `M * (x, y, z, 1)`.
-/// - **Normals**: transformed by the *cofactor* matrix of `M`'s 3x3 part `A` (columns `a0 a1 a2`):
-///   `n' = n.x*(a1×a2) + n.y*(a2×a0) + n.z*(a0×a1)`, negated when `det A < 0`, then normalised. That is
-///   the inverse-transpose up to a positive factor, which renormalisation removes, so normals stay
-///   perpendicular to the surface under non-uniform scale and mirroring, without a matrix inverse. A
-///   normal that ends up zero-length (degenerate matrix or zero input) is written as zero.
-/// - **Zero weights are included**: all four influences are always blended (a weight of 0 adds
-///   exactly `0 * P[j]`), so the loop has no data-dependent branch and the operation order never
-///   changes. Consequently all four joint indices of every vertex must be valid, even with weight 0.
-///   Weights are used as given; they are not renormalised.
-///
-/// `normals` and `out_normals` may both be empty to skin positions only; otherwise every per-vertex
-/// slice must have the same length as `positions`.
-pub fn skin(
+multiversion! {
+    /// Linear blend skinning of positions and normals with four influences per vertex.
+    ///
+    /// For vertex `v` with joints `j` and weights `w`, the blended matrix is, column by column and in this
+    /// order, `((P[j0]*w0 + P[j1]*w1) + P[j2]*w2) + P[j3]*w3` (only the upper 3x4 part is used; the palette's
+    /// bottom row is assumed to be `0 0 0 1`).
+    ///
+    /// - **Positions**: `M * (x, y, z, 1)`.
+    /// - **Normals**: transformed by the *cofactor* matrix of `M`'s 3x3 part `A` (columns `a0 a1 a2`):
+    ///   `n' = n.x*(a1×a2) + n.y*(a2×a0) + n.z*(a0×a1)`, negated when `det A < 0`, then normalised. That is
+    ///   the inverse-transpose up to a positive factor, which renormalisation removes, so normals stay
+    ///   perpendicular to the surface under non-uniform scale and mirroring, without a matrix inverse. A
+    ///   normal that ends up zero-length (degenerate matrix or zero input) is written as zero.
+    /// - **Zero weights are included**: all four influences are always blended (a weight of 0 adds
+    ///   exactly `0 * P[j]`), so the loop has no data-dependent branch and the operation order never
+    ///   changes. Consequently all four joint indices of every vertex must be valid, even with weight 0.
+    ///   Weights are used as given; they are not renormalised.
+    ///
+    /// `normals` and `out_normals` may both be empty to skin positions only; otherwise every per-vertex
+    /// slice must have the same length as `positions`.
+    pub fn skin(
+        palette: &[Mat4],
+        positions: &[Vec3],
+        normals: &[Vec3],
+        joints: &[[u16; MAX_INFLUENCES]],
+        weights: &[[f32; MAX_INFLUENCES]],
+        out_positions: &mut [Vec3],
+        out_normals: &mut [Vec3],
+    ) -> Result<(), SkinError> => skin_generic;
+}
+
+#[inline(always)]
+fn skin_generic(
     palette: &[Mat4],
     positions: &[Vec3],
     normals: &[Vec3],
@@ -367,6 +503,145 @@ fn normalize_yzx(r: Vec3A, d: Vec3A) -> Vec3 {
 mod tests {
     use super::*;
     use glam::Quat;
+
+    /// xorshift32 in [-1, 1).
+    struct Rng(u32);
+    impl Rng {
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 17;
+            self.0 ^= self.0 << 5;
+            (self.0 >> 8) as f32 / (1u32 << 23) as f32 - 1.0
+        }
+        fn vec3(&mut self) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next())
+        }
+    }
+
+    fn bits(m: &[Mat4]) -> Vec<u32> {
+        m.iter()
+            .flat_map(|m| m.to_cols_array())
+            .map(f32::to_bits)
+            .collect()
+    }
+
+    /// A random 23-joint tree (parents before children) with non-uniform scales.
+    fn rig(rng: &mut Rng) -> (Vec<Option<JointIndex>>, Vec<Transform>, Vec<Mat4>) {
+        let n = 23;
+        let parents: Vec<Option<JointIndex>> = (0..n)
+            .map(|i| (i > 0).then(|| ((rng.next() + 1.0) * 0.5 * i as f32) as JointIndex))
+            .collect();
+        let locals: Vec<Transform> = (0..n)
+            .map(|_| {
+                Transform::new(
+                    rng.vec3() * 3.0,
+                    Quat::from_xyzw(rng.next(), rng.next(), rng.next(), rng.next()).normalize(),
+                    Vec3::ONE + rng.vec3() * 0.5,
+                )
+            })
+            .collect();
+        let inverse_bind = (0..n)
+            .map(|_| {
+                Mat4::from_scale_rotation_translation(
+                    Vec3::ONE + rng.vec3() * 0.2,
+                    Quat::from_rotation_y(rng.next() * 3.0),
+                    rng.vec3() * 10.0,
+                )
+            })
+            .collect();
+        (parents, locals, inverse_bind)
+    }
+
+    #[test]
+    fn every_instruction_set_and_layout_gives_the_same_bits() {
+        let mut rng = Rng(0x9e37_79b9);
+        for _ in 0..20 {
+            let (parents, locals, inverse_bind) = rig(&mut rng);
+            let n = parents.len();
+            let run = |models: &mut Vec<Mat4>, palette: &mut Vec<Mat4>| {
+                local_to_model_and_palette(&parents, &locals, &inverse_bind, models, palette)
+                    .unwrap();
+            };
+            let (mut m1, mut p1) = (vec![Mat4::ZERO; n], vec![Mat4::ZERO; n]);
+            let (mut m2, mut p2) = (vec![Mat4::ZERO; n], vec![Mat4::ZERO; n]);
+            run(&mut m1, &mut p1);
+            crate::cpu::baseline(|| run(&mut m2, &mut p2));
+            assert_eq!(bits(&m1), bits(&m2));
+            assert_eq!(bits(&p1), bits(&p2));
+            // The block path, in level order, with and without AVX.
+            let blocks = soa::from_transforms(&locals);
+            let order = level_order(&parents);
+            for baseline in [false, true] {
+                let (mut m3, mut p3) = (vec![Mat4::ZERO; n], vec![Mat4::ZERO; n]);
+                let mut scratch = Vec::new();
+                let mut go = || {
+                    local_to_model_and_palette_blocks(
+                        &parents,
+                        &order,
+                        &blocks,
+                        &inverse_bind,
+                        &mut scratch,
+                        &mut m3,
+                        &mut p3,
+                    )
+                    .unwrap()
+                };
+                if baseline {
+                    crate::cpu::baseline(go);
+                } else {
+                    go();
+                }
+                assert_eq!(bits(&m1), bits(&m3));
+                assert_eq!(bits(&p1), bits(&p3));
+            }
+            // Skinning with random influences, positions and normals.
+            let vertices = 301;
+            let positions: Vec<Vec3> = (0..vertices).map(|_| rng.vec3() * 50.0).collect();
+            let normals: Vec<Vec3> = (0..vertices)
+                .map(|_| rng.vec3().normalize_or(Vec3::Y))
+                .collect();
+            let joints: Vec<[u16; 4]> = (0..vertices)
+                .map(|_| [0; 4].map(|_| ((rng.next() + 1.0) * 0.5 * n as f32) as u16 % n as u16))
+                .collect();
+            let weights: Vec<[f32; 4]> = (0..vertices)
+                .map(|_| [0; 4].map(|_| (rng.next() + 1.0) * 0.25))
+                .collect();
+            let skin_with = |out_p: &mut Vec<Vec3>, out_n: &mut Vec<Vec3>| {
+                skin(&p1, &positions, &normals, &joints, &weights, out_p, out_n).unwrap();
+            };
+            let (mut a_p, mut a_n) = (vec![Vec3::ZERO; vertices], vec![Vec3::ZERO; vertices]);
+            let (mut b_p, mut b_n) = (vec![Vec3::ZERO; vertices], vec![Vec3::ZERO; vertices]);
+            skin_with(&mut a_p, &mut a_n);
+            crate::cpu::baseline(|| skin_with(&mut b_p, &mut b_n));
+            let vbits = |v: &[Vec3]| -> Vec<u32> {
+                v.iter()
+                    .flat_map(|v| v.to_array())
+                    .map(f32::to_bits)
+                    .collect()
+            };
+            assert_eq!(vbits(&a_p), vbits(&b_p));
+            assert_eq!(vbits(&a_n), vbits(&b_n));
+        }
+    }
+
+    #[test]
+    fn level_order_visits_every_joint_after_its_parent() {
+        let mut rng = Rng(7);
+        let (parents, _, _) = rig(&mut rng);
+        let order = level_order(&parents);
+        let mut seen = vec![false; parents.len()];
+        for &j in &order {
+            if let Some(p) = parents[j as usize] {
+                assert!(seen[p as usize], "{j} before its parent {p}");
+            }
+            assert!(!seen[j as usize]);
+            seen[j as usize] = true;
+        }
+        assert!(seen.iter().all(|&s| s));
+        // Level by level: a biped-like chain and two branches.
+        let parents = [None, Some(0), Some(1), Some(1), Some(2), Some(3), Some(0)];
+        assert_eq!(level_order(&parents), [0, 1, 6, 2, 3, 4, 5]);
+    }
 
     #[test]
     fn normals_under_non_uniform_scale_stay_perpendicular() {

@@ -4,11 +4,16 @@
 //! submesh so that material ranges survive, with:
 //! - attribute-aware collapses: normals and UVs weigh in the collapse cost;
 //! - skin awareness: each vertex also carries its displacement under two fixed test poses of the
-//!   skeleton (every joint turned 25 degrees about its local X, then about its local Z). Two vertices
-//!   whose influences differ move apart under those poses, so collapsing one into the other costs what
-//!   it would tear at runtime: bone boundaries are kept where they matter and cheap where they do not;
+//!   skeleton (every joint turned 25 degrees about its local X, then about its local Z), weighted
+//!   above the normals. Two vertices whose influences differ move apart under those poses, so
+//!   collapsing one into the other costs what it would tear at runtime: bone boundaries are kept where
+//!   they matter and cheap where they do not;
 //! - locks on material borders: a vertex whose position is also used by another submesh does not move,
 //!   so neighbouring submeshes still meet;
+//! - meshoptimizer's `Permissive` option with every vertex protected except those on hard normal
+//!   edges: vertices that share a position but differ only in their normal may be collapsed across,
+//!   with the normal difference counted as attribute error, while UV seams, skin seams and everything
+//!   else keep meshoptimizer's usual rules;
 //! - meshoptimizer's `RegularizeLight` option, which its author recommends for deforming meshes.
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
@@ -22,7 +27,7 @@ use sinew_core::glam;
 use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, Scene};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 
 /// What to build.
 #[derive(Debug, Clone, PartialEq)]
@@ -61,6 +66,12 @@ pub struct LodTuning {
     pub pose_weight: f32,
     /// meshoptimizer's `RegularizeLight` option.
     pub regularize: bool,
+    /// meshoptimizer's `Permissive` option, with every vertex but those on hard normal edges protected
+    /// (false: hard normal edges restrict collapses like every other attribute seam).
+    pub permissive: bool,
+    /// Build each LOD from the previous one (true) or every LOD from LOD 0 (false, each with the
+    /// whole error budget).
+    pub chain: bool,
 }
 
 impl Default for LodTuning {
@@ -70,6 +81,8 @@ impl Default for LodTuning {
             uv_weight: UV_WEIGHT,
             pose_weight: POSE_WEIGHT,
             regularize: true,
+            permissive: true,
+            chain: true,
         }
     }
 }
@@ -171,9 +184,9 @@ pub fn validate_lod(lod: &Lod) -> Result<(), String> {
 
 /// Per-vertex attributes the simplifier weighs: normal (3), UV (2), displacement under two test poses (6).
 const ATTRIBUTE_COUNT: usize = 11;
-const NORMAL_WEIGHT: f32 = 0.5;
+const NORMAL_WEIGHT: f32 = 0.2;
 const UV_WEIGHT: f32 = 0.5;
-const POSE_WEIGHT: f32 = 1.0;
+const POSE_WEIGHT: f32 = 4.0;
 const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
 
 /// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
@@ -258,11 +271,18 @@ fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
     out
 }
 
-/// Vertices used by more than one submesh, by exact position: material borders, locked.
-fn border_locks(lod: &Lod) -> Vec<SimplifyVertex> {
-    let mut owner: std::collections::HashMap<[u32; 3], usize> = std::collections::HashMap::new();
-    let mut shared: HashSet<[u32; 3]> = HashSet::new();
+/// Per-vertex flags for meshoptimizer, one per vertex (never an empty slice for a mesh with vertices):
+/// - `Lock` for vertices whose position is used by more than one submesh (material borders);
+/// - `Protect` for every other vertex except those on a hard normal edge: a position shared by
+///   several vertices that all have the same UV, joints and weights and differ only in the normal.
+///   With `Permissive`, meshoptimizer may collapse across the discontinuities of unprotected vertices
+///   (paying the normal difference as attribute error) and treats protected ones as it does without
+///   `Permissive`: UV seams, skin seams and whatever it locks for topology stay as they were. Without
+///   `Permissive`, `Protect` changes nothing.
+fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
     let key = |p: glam::Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    let mut owner: HashMap<[u32; 3], usize> = HashMap::new();
+    let mut shared: HashSet<[u32; 3]> = HashSet::new();
     for (s, sub) in lod.submeshes.iter().enumerate() {
         let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
         for &i in &lod.indices[range] {
@@ -278,13 +298,35 @@ fn border_locks(lod: &Lod) -> Vec<SimplifyVertex> {
             }
         }
     }
+    // Per position: its first vertex, and whether a later vertex there has the same UV and skin
+    // (a hard normal edge, opened) or not (a UV or skin seam, kept).
+    let mut first: HashMap<[u32; 3], usize> = HashMap::new();
+    let mut hard_edge: HashMap<[u32; 3], bool> = HashMap::new();
+    for (v, p) in lod.positions.iter().enumerate() {
+        let k = key(*p);
+        match first.get(&k) {
+            None => {
+                first.insert(k, v);
+            }
+            Some(&a) => {
+                let same = lod.uvs.get(a) == lod.uvs.get(v)
+                    && lod.joints.get(a) == lod.joints.get(v)
+                    && lod.weights.get(a) == lod.weights.get(v);
+                let open = hard_edge.entry(k).or_insert(true);
+                *open &= same;
+            }
+        }
+    }
     lod.positions
         .iter()
         .map(|p| {
-            if shared.contains(&key(*p)) {
+            let k = key(*p);
+            if shared.contains(&k) {
                 SimplifyVertex::Lock
-            } else {
+            } else if hard_edge.get(&k) == Some(&true) {
                 SimplifyVertex::None
+            } else {
+                SimplifyVertex::Protect
             }
         })
         .collect()
@@ -438,12 +480,15 @@ fn simplify_step(
     if source.is_skinned() && skeleton.is_some() {
         weights[5..].fill(tuning.pose_weight);
     }
-    let flags = if tuning.regularize {
+    let mut flags = if tuning.regularize {
         SimplifyOptions::RegularizeLight
     } else {
         SimplifyOptions::None
     };
-    let locks = border_locks(source);
+    if tuning.permissive {
+        flags |= SimplifyOptions::Permissive;
+    }
+    let locks = vertex_flags(source);
     let total = source.triangle_count().max(1);
     let mut indices = Vec::with_capacity(source.indices.len());
     let mut submeshes = Vec::with_capacity(source.submeshes.len());
@@ -707,7 +752,11 @@ pub fn build_lods_tuned(
     let mut accumulated = 0.0f32;
     for (k, &ratio) in options.ratios.iter().enumerate() {
         let target = ((base_tris as f64) * ratio as f64).round() as usize;
-        let budget = (options.max_error - accumulated).max(0.0);
+        let budget = if tuning.chain {
+            (options.max_error - accumulated).max(0.0)
+        } else {
+            options.max_error
+        };
         let flat = is_flat_soup(&previous);
         let welded = weld(&previous, flat);
         validate_lod(&welded).map_err(|problem| LodError::BadMesh {
@@ -716,7 +765,11 @@ pub fn build_lods_tuned(
         })?;
         let (lod, step_error) = simplify_step(&welded, skeleton, target, budget, tuning);
         let mut lod = if flat { flat_soup(&lod) } else { lod };
-        accumulated += step_error;
+        accumulated = if tuning.chain {
+            accumulated + step_error
+        } else {
+            step_error
+        };
         if k + 1 == options.ratios.len() && options.lowest_lod_influences < MAX_INFLUENCES {
             limit_influences(&mut lod, options.lowest_lod_influences);
         }
@@ -737,7 +790,9 @@ pub fn build_lods_tuned(
             stopped_by_error_limit: stopped,
             lod: lod.clone(),
         });
-        previous = lod;
+        if tuning.chain {
+            previous = lod;
+        }
     }
     Ok(out)
 }

@@ -1,0 +1,59 @@
+//! Which instruction set the per-frame loops run with.
+//!
+//! The hot functions are written once, in portable Rust on glam, and on x86_64 compiled twice: for the
+//! baseline (SSE2, which every x86_64 CPU has) and with AVX enabled; at run time the AVX copy is used
+//! when the CPU has AVX. Both copies perform the same IEEE operations in the same order: AVX changes the
+//! instruction encoding (three-operand forms without register copies, broadcasts straight from memory),
+//! not the arithmetic, and FMA is never enabled because fusing a multiply with an add changes rounding.
+//! So results are the same bits on every x86_64 CPU; unit tests run both copies and compare them.
+
+/// Defines a function that runs `$generic` (an `#[inline(always)]` function with the same signature)
+/// from an AVX-compiled copy when the CPU has AVX, and from the baseline build otherwise.
+macro_rules! multiversion {
+    ($(#[$meta:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty => $generic:path;) => {
+        $(#[$meta])*
+        $vis fn $name($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            {
+                #[target_feature(enable = "avx")]
+                fn with_avx($($arg: $ty),*) -> $ret {
+                    $generic($($arg),*)
+                }
+                if $crate::cpu::use_avx() {
+                    // SAFETY: `use_avx` is true only when the running CPU has AVX, which is all that
+                    // `with_avx` requires.
+                    #[allow(unsafe_code)]
+                    return unsafe { with_avx($($arg),*) };
+                }
+            }
+            $generic($($arg),*)
+        }
+    };
+}
+pub(crate) use multiversion;
+
+/// True when the AVX copies may run: the CPU has AVX (and, in this crate's unit tests, the calling
+/// thread has not asked for the baseline).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn use_avx() -> bool {
+    #[cfg(test)]
+    if BASELINE.with(|b| b.get()) {
+        return false;
+    }
+    std::arch::is_x86_feature_detected!("avx")
+}
+
+#[cfg(test)]
+thread_local! {
+    static BASELINE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with the baseline copies on this thread (unit tests compare it with the AVX copies).
+#[cfg(test)]
+pub(crate) fn baseline<R>(f: impl FnOnce() -> R) -> R {
+    BASELINE.with(|b| b.set(true));
+    let r = f();
+    BASELINE.with(|b| b.set(false));
+    r
+}

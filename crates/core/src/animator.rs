@@ -513,10 +513,8 @@ impl Animator {
         }
         self.blend_normal_layers()?;
         skinning::local_to_model_and_palette_blocks(
-            skeleton.parents(),
-            skeleton.level_order(),
+            &skeleton,
             &self.local,
-            skeleton.inverse_bind(),
             &mut self.local_matrices,
             models,
             palette,
@@ -609,6 +607,10 @@ fn skeleton_bind(skeleton: &Skeleton) -> Vec<Transform> {
 fn wrap_time(clip: &Clip, t: f32) -> f32 {
     let d = clip.duration();
     if clip.looping() {
+        if t >= 0.0 && t < d {
+            // `rem_euclid` would return `t` itself, at the cost of a library call per frame.
+            return t;
+        }
         if d > 0.0 {
             let r = t.rem_euclid(d);
             if r >= d {

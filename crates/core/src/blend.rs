@@ -9,7 +9,8 @@
 //!    `w * value`; the rotation is summed as `w * q`, with `q` first negated when it points away from the
 //!    sum so far (`dot < 0`), which blends along the shortest path.
 //! 2. [`BlendBuffers::resolve`] writes the result. For a joint whose total weight `W` is at least 1, the
-//!    sums are divided by `W` (the rotation sum is normalised): weights are normalised. For `W < 1` the
+//!    sums are divided by `W` (the rotation sum is normalised, as `q * (1 / |q|)`, the runtime's
+//!    normalisation): weights are normalised. For `W < 1` the
 //!    bind pose fills the remainder: `1 - W` of the bind translation, scale and (sign-aligned) rotation are
 //!    added before normalising. A joint no layer reached (`W == 0`) is the bind pose exactly.
 //! 3. [`apply_additive`] once per *additive* layer, in order, on the resolved pose.
@@ -39,6 +40,7 @@
 //! Nothing here allocates: all state lives in the [`BlendBuffers`].
 
 use crate::skeleton::JointIndex;
+use crate::soa::normalize_rotation;
 use crate::Transform;
 use glam::{Quat, Vec3, Vec3A};
 
@@ -223,13 +225,13 @@ impl BlendBuffers {
                 // Dividing a non-NaN value by exactly 1 changes no bits: skip the two divisions.
                 Transform {
                     translation: Vec3::from(a.translation),
-                    rotation: a.rotation.normalize(),
+                    rotation: normalize_rotation(a.rotation),
                     scale: Vec3::from(a.scale),
                 }
             } else if w >= 1.0 {
                 Transform {
                     translation: Vec3::from(a.translation / w),
-                    rotation: a.rotation.normalize(),
+                    rotation: normalize_rotation(a.rotation),
                     scale: Vec3::from(a.scale / w),
                 }
             } else if w > 0.0 {
@@ -241,7 +243,7 @@ impl BlendBuffers {
                 };
                 Transform {
                     translation: Vec3::from(a.translation + Vec3A::from(b.translation) * rest),
-                    rotation: (a.rotation + br * rest).normalize(),
+                    rotation: normalize_rotation(a.rotation + br * rest),
                     scale: Vec3::from(a.scale + Vec3A::from(b.scale) * rest),
                 }
             } else {

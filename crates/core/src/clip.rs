@@ -206,11 +206,22 @@ fn curve_at<T: Copy>(c: &Curve<T>, t: f32, lerp: impl Fn(T, T, f32) -> T) -> T {
     }
 }
 
-/// Normalised lerp along the shortest path.
+/// The runtime's normalisation of a rotation: `q * (1 / |q|)`, the length summed as glam's `dot` sums
+/// (`(x*x + z*z) + (y*y + w*w)`). Sampling and blending normalise this way, four joints at a time
+/// with the same per-lane operations (one division per four rotations instead of four); the result is
+/// within an ulp of `q / |q|`.
+#[inline]
+pub fn normalize_rotation(q: Quat) -> Quat {
+    q * q.length_recip()
+}
+
+/// Normalised lerp along the shortest path: `b` is negated when `a · b < 0`, then
+/// `a * (1 - alpha) + b * alpha` is normalised with [`normalize_rotation`]. The sampler does exactly
+/// this, four joints at a time.
 #[inline]
 pub fn nlerp(a: Quat, b: Quat, alpha: f32) -> Quat {
     let b = if a.dot(b) < 0.0 { -b } else { b };
-    (a * (1.0 - alpha) + b * alpha).normalize()
+    normalize_rotation(a * (1.0 - alpha) + b * alpha)
 }
 
 impl Clip {
@@ -632,6 +643,11 @@ impl Clip {
             return 0.0;
         }
         if self.looping && self.duration > 0.0 {
+            if t >= 0.0 && t < self.duration {
+                // Already wrapped (the animator keeps its times so): `rem_euclid` would return `t`
+                // itself, at the cost of a library call.
+                return t;
+            }
             let r = t.rem_euclid(self.duration);
             if r >= self.duration {
                 0.0
@@ -1521,7 +1537,9 @@ mod tests {
                     rotation: match track.rotation {
                         Channel::Bind => d.rotation,
                         Channel::Constant(r) => r,
-                        Channel::Animated(o) if a == 0.0 => f0.quat_raw(o as usize).normalize(),
+                        Channel::Animated(o) if a == 0.0 => {
+                            normalize_rotation(f0.quat_raw(o as usize))
+                        }
                         Channel::Animated(o) => {
                             nlerp(f0.quat_raw(o as usize), f1.quat_raw(o as usize), a)
                         }

@@ -126,49 +126,47 @@ fn local_to_model_and_palette_generic(
     Ok(())
 }
 
-multiversion! {
-    /// [`local_to_model_and_palette`] reading the local pose from blocks of four joints (see
-    /// [`crate::soa`]; joint `i` is lane `i % 4` of block `i / 4`). Same arithmetic, same bits.
-    ///
-    /// `parents` must be a [`crate::Skeleton`]'s (every parent before its child; not checked again
-    /// here, once per frame). All local matrices are built first (into `scratch`), then the joints are
-    /// visited in `order`, which must list every joint once, after its parent: the skeleton's
-    /// [`level_order`], which puts
-    /// a joint's dependants a whole level of the skeleton later, so the CPU can overlap independent
-    /// joints instead of waiting on each parent. (Indices are checked, so a wrong order gives wrong
-    /// matrices, never a panic.)
-    pub(crate) fn local_to_model_and_palette_blocks(
-        parents: &[Option<JointIndex>],
-        order: &[JointIndex],
-        blocks: &[Vec4],
-        inverse_bind: &[Mat4],
-        scratch: &mut Vec<f32>,
-        models: &mut [Mat4],
-        palette: &mut [Mat4],
-    ) -> Result<(), SkinError> => local_to_model_and_palette_blocks_generic;
-}
-
-#[inline(always)]
-fn local_to_model_and_palette_blocks_generic(
-    parents: &[Option<JointIndex>],
-    order: &[JointIndex],
+/// [`local_to_model_and_palette`] for `skeleton`, reading the local pose from blocks of four joints
+/// (see [`crate::soa`]; joint `i` is lane `i % 4` of block `i / 4`). Same arithmetic, same bits.
+///
+/// All local matrices are built first (into `scratch`), then the joints are visited in the
+/// skeleton's [`level_order`], which puts a joint's dependants a whole level later, so the CPU can
+/// overlap independent joints instead of waiting on each parent.
+pub(crate) fn local_to_model_and_palette_blocks(
+    skeleton: &crate::Skeleton,
     blocks: &[Vec4],
-    inverse_bind: &[Mat4],
     scratch: &mut Vec<f32>,
     models: &mut [Mat4],
     palette: &mut [Mat4],
 ) -> Result<(), SkinError> {
-    let n = parents.len();
+    let n = skeleton.len();
     same_len(
         "local blocks",
         soa::block_count(n) * soa::COMPONENTS,
         blocks.len(),
     )?;
     same_len("models", n, models.len())?;
-    same_len("inverse bind matrices", n, inverse_bind.len())?;
     same_len("palette", n, palette.len())?;
-    same_len("joint order", n, order.len())?;
     scratch.resize(soa::block_count(n) * LOCAL, 0.0);
+    fill_local_matrices(blocks, scratch);
+    models_and_palette_in_order(
+        skeleton.parents(),
+        skeleton.level_order(),
+        skeleton.inverse_bind(),
+        scratch,
+        models,
+        palette,
+    );
+    Ok(())
+}
+
+multiversion! {
+    /// [`local_matrices`] of every block of `blocks` into `scratch` (sized by the caller).
+    fn fill_local_matrices(blocks: &[Vec4], scratch: &mut [f32]) -> () => fill_local_matrices_generic;
+}
+
+#[inline(always)]
+fn fill_local_matrices_generic(blocks: &[Vec4], scratch: &mut [f32]) {
     for (block, local) in blocks
         .chunks_exact(soa::COMPONENTS)
         .zip(scratch.chunks_exact_mut(LOCAL))
@@ -180,6 +178,35 @@ fn local_to_model_and_palette_blocks_generic(
             *local = local_matrices(block);
         }
     }
+}
+
+multiversion! {
+    /// Model matrices and palette entries of the joints in `order` (every joint once, after its
+    /// parent), from the local matrices in `scratch`.
+    fn models_and_palette_in_order(
+        parents: &[Option<JointIndex>],
+        order: &[JointIndex],
+        inverse_bind: &[Mat4],
+        scratch: &[f32],
+        models: &mut [Mat4],
+        palette: &mut [Mat4],
+    ) -> () => models_and_palette_in_order_generic;
+}
+
+#[inline(always)]
+fn models_and_palette_in_order_generic(
+    parents: &[Option<JointIndex>],
+    order: &[JointIndex],
+    inverse_bind: &[Mat4],
+    scratch: &[f32],
+    models: &mut [Mat4],
+    palette: &mut [Mat4],
+) {
+    let n = parents
+        .len()
+        .min(models.len())
+        .min(palette.len())
+        .min(inverse_bind.len());
     for &i in order {
         let i = i as usize;
         let Some(Ok(local)) = scratch
@@ -195,7 +222,6 @@ fn local_to_model_and_palette_blocks_generic(
         models[i] = m;
         palette[i] = mul_affine(&m, &inverse_bind[i]);
     }
-    Ok(())
 }
 
 /// Floats of [`local_matrices`] per block of four joints.
@@ -568,18 +594,22 @@ mod tests {
             crate::cpu::baseline(|| run(&mut m2, &mut p2));
             assert_eq!(bits(&m1), bits(&m2));
             assert_eq!(bits(&p1), bits(&p2));
-            // The block path, in level order, with and without AVX.
+            // The block path, in level order, with and without AVX (pairs of joints per register).
             let blocks = soa::from_transforms(&locals);
-            let order = level_order(&parents);
+            let skeleton = crate::Skeleton::new(
+                (0..n).map(|i| format!("j{i}")).collect(),
+                parents.clone(),
+                locals.clone(),
+                inverse_bind.clone(),
+            )
+            .unwrap();
             for baseline in [false, true] {
                 let (mut m3, mut p3) = (vec![Mat4::ZERO; n], vec![Mat4::ZERO; n]);
                 let mut scratch = Vec::new();
                 let mut go = || {
                     local_to_model_and_palette_blocks(
-                        &parents,
-                        &order,
+                        &skeleton,
                         &blocks,
-                        &inverse_bind,
                         &mut scratch,
                         &mut m3,
                         &mut p3,

@@ -64,12 +64,16 @@ pub(crate) fn dot_q(a: &[Vec4; 4], b: &[Vec4; 4]) -> Vec4 {
     (a[0] * b[0] + a[2] * b[2]) + (a[1] * b[1] + a[3] * b[3])
 }
 
-/// `q / |q|` per lane (glam's `Quat::normalize`).
+/// `q * (1 / |q|)` per lane: the runtime's normalisation ([`normalize_rotation`] for one quaternion).
+/// One division per four quaternions instead of four: the divider, not the adders, is what limits
+/// sampling and blending, and the result is within an ulp of `q / |q|`.
 #[inline(always)]
 pub(crate) fn normalize_q(q: [Vec4; 4]) -> [Vec4; 4] {
-    let len = sqrt4(dot_q(&q, &q));
-    q.map(|c| c / len)
+    let inv = Vec4::ONE / sqrt4(dot_q(&q, &q));
+    q.map(|c| c * inv)
 }
+
+pub(crate) use crate::clip::normalize_rotation;
 
 /// `q` negated (multiplied by -1, as glam's `-q`) in the lanes where `d < 0`.
 #[inline(always)]
@@ -413,7 +417,7 @@ mod tests {
         let n = normalize_q(b.map(|v| v * 3.0));
         for l in 0..4 {
             assert_eq!(d[l].to_bits(), q0[l].dot(q1[l]).to_bits());
-            let want = (q1[l] * 3.0).normalize();
+            let want = normalize_rotation(q1[l] * 3.0);
             for (c, w) in want.to_array().into_iter().enumerate() {
                 assert_eq!(n[c][l].to_bits(), w.to_bits());
             }

@@ -41,7 +41,7 @@
 //!
 //! Key times are kept as the source has them (no resampling), so every source key is honoured in time.
 
-use sinew_core::clip::nlerp;
+use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::compressed::{
     dequant_params, pack, smallest_three, QuantizedParts, SegmentComponent, MAX_BITS,
 };
@@ -1366,7 +1366,7 @@ impl<'a> Eval<'a> {
                         }
                         self.dirty[d] |= rot_changed;
                         let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
-                        rot = raw_rotation(index, q).normalize();
+                        rot = normalize_rotation(raw_rotation(index, q));
                     }
                 }
                 if changed.is_some() && n == 0 && !rot_changed {
@@ -1452,7 +1452,7 @@ impl<'a> Eval<'a> {
                 base.scale = self.vec3(c, k0);
             }
             if let Some(c) = fr {
-                base.rotation = self.quat(c, k0).normalize();
+                base.rotation = normalize_rotation(self.quat(c, k0));
             }
         } else {
             if let Some(c) = ft {

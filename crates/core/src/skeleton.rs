@@ -69,6 +69,8 @@ pub struct Skeleton {
     bind_blocks: Vec<glam::Vec4>,
     /// [`crate::skinning::level_order`] of `parents`.
     level_order: Vec<JointIndex>,
+    /// `inverse_bind` with every entry broadcast (see [`crate::skinning::Splats`]).
+    inverse_bind_splats: Vec<crate::skinning::Splats>,
 }
 
 impl Skeleton {
@@ -190,12 +192,18 @@ impl Skeleton {
         Ok(Skeleton {
             bind_blocks: crate::soa::from_transforms(&bind_local),
             level_order: crate::skinning::level_order(&parents),
+            inverse_bind_splats: inverse_bind.iter().map(crate::skinning::splats).collect(),
             names,
             parents,
             bind_local,
             inverse_bind,
             by_name,
         })
+    }
+
+    /// The inverse bind matrices with every entry broadcast.
+    pub(crate) fn inverse_bind_splats(&self) -> &[crate::skinning::Splats] {
+        &self.inverse_bind_splats
     }
 
     /// The joints level by level (see [`crate::skinning::level_order`]).

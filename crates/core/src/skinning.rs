@@ -152,12 +152,27 @@ pub(crate) fn local_to_model_and_palette_blocks(
     models_and_palette_in_order(
         skeleton.parents(),
         skeleton.level_order(),
-        skeleton.inverse_bind(),
+        skeleton.inverse_bind_splats(),
         scratch,
         models,
         palette,
     );
     Ok(())
+}
+
+/// A matrix's upper 3x4 entries, each broadcast to four lanes: entry `3 * c + r` is row `r` of column
+/// `c`. Multiplying by a broadcast kept in memory saves the broadcast instruction of every use.
+pub(crate) type Splats = [Vec4; 12];
+
+/// `m`'s [`Splats`].
+pub(crate) fn splats(m: &Mat4) -> Splats {
+    let mut out = [Vec4::ZERO; 12];
+    for c in 0..4 {
+        for r in 0..3 {
+            out[3 * c + r] = Vec4::splat(m.col(c)[r]);
+        }
+    }
+    out
 }
 
 multiversion! {
@@ -186,7 +201,7 @@ multiversion! {
     fn models_and_palette_in_order(
         parents: &[Option<JointIndex>],
         order: &[JointIndex],
-        inverse_bind: &[Mat4],
+        inverse_bind: &[Splats],
         scratch: &[f32],
         models: &mut [Mat4],
         palette: &mut [Mat4],
@@ -197,7 +212,7 @@ multiversion! {
 fn models_and_palette_in_order_generic(
     parents: &[Option<JointIndex>],
     order: &[JointIndex],
-    inverse_bind: &[Mat4],
+    inverse_bind: &[Splats],
     scratch: &[f32],
     models: &mut [Mat4],
     palette: &mut [Mat4],
@@ -220,7 +235,7 @@ fn models_and_palette_in_order_generic(
         }
         let m = model_of(parents, models, i, local, i % 4);
         models[i] = m;
-        palette[i] = mul_affine(&m, &inverse_bind[i]);
+        palette[i] = mul_affine_splats(&m, &inverse_bind[i]);
     }
 }
 
@@ -323,6 +338,14 @@ pub fn skinning_palette(
         *out = mul_affine(m, ib);
     }
     Ok(())
+}
+
+/// [`mul_affine`] with `b` as [`Splats`]: the same products and sums, the same bits.
+#[inline(always)]
+fn mul_affine_splats(a: &Mat4, b: &Splats) -> Mat4 {
+    let (ax, ay, az, aw) = (a.x_axis, a.y_axis, a.z_axis, a.w_axis);
+    let col = |c: usize| ax * b[3 * c] + ay * b[3 * c + 1] + az * b[3 * c + 2];
+    Mat4::from_cols(col(0), col(1), col(2), col(3) + aw)
 }
 
 /// `a * b` for affine matrices: `b`'s bottom row is taken as `0 0 0 1` (its stored bottom row is not

@@ -1263,9 +1263,11 @@ impl Sampler {
         let blocks = c0
             .chunks_exact(soa::COMPONENTS)
             .zip(c1.chunks_exact(soa::COMPONENTS));
+        let mut block = [glam::Vec4::ZERO; soa::COMPONENTS];
         for (pb, (b0, b1)) in binding.plan.iter().zip(blocks) {
             if let (Ok(b0), Ok(b1)) = (<&soa::Block>::try_from(b0), <&soa::Block>::try_from(b1)) {
-                f(pb, &soa::sample_block(pb, b0, b1, a, raw));
+                soa::sample_block(pb, b0, b1, a, raw, &mut block);
+                f(pb, &block);
             }
         }
         Ok(())

@@ -223,41 +223,42 @@ pub(crate) fn sample_block(
     c1: &Block,
     a: f32,
     raw_rotations: bool,
-) -> Block {
+    out: &mut Block,
+) {
     let fixed = &plan.fixed;
-    let mut out = *fixed;
     let (ta, tb) = (Vec4::splat(1.0 - a), Vec4::splat(a));
     for (kind, first) in [(0, T), (2, S)] {
-        match plan.source[kind] {
-            Source::Fixed => {}
-            _ if a == 0.0 => out[first..first + 3].copy_from_slice(&c0[first..first + 3]),
-            Source::Animated => {
-                for c in first..first + 3 {
-                    out[c] = c0[c] * ta + c1[c] * tb;
-                }
-            }
-            Source::Mixed => {
-                let m = lanes(plan.animated[kind]);
-                for c in first..first + 3 {
-                    out[c] = select(m, c0[c] * ta + c1[c] * tb, fixed[c]);
-                }
-            }
+        for c in first..first + 3 {
+            out[c] = match plan.source[kind] {
+                Source::Fixed => fixed[c],
+                _ if a == 0.0 => c0[c],
+                Source::Animated => c0[c] * ta + c1[c] * tb,
+                Source::Mixed => select(
+                    lanes(plan.animated[kind]),
+                    c0[c] * ta + c1[c] * tb,
+                    fixed[c],
+                ),
+            };
         }
     }
     let q = match plan.source[1] {
-        Source::Fixed => return out,
-        _ if a == 0.0 && !raw_rotations => {
-            out[R..R + 4].copy_from_slice(&c0[R..R + 4]);
-            return out;
-        }
+        Source::Fixed => [fixed[R], fixed[R + 1], fixed[R + 2], fixed[R + 3]],
+        _ if a == 0.0 && !raw_rotations => rotation(c0),
         _ if a == 0.0 => normalize_q(rotation(c0)),
         _ => {
             let (q0, q1) = (rotation(c0), rotation(c1));
             let q1 = negate_where_negative(q1, dot_q(&q0, &q1));
-            normalize_q([0, 1, 2, 3].map(|i| q0[i] * ta + q1[i] * tb))
+            normalize_q([
+                q0[0] * ta + q1[0] * tb,
+                q0[1] * ta + q1[1] * tb,
+                q0[2] * ta + q1[2] * tb,
+                q0[3] * ta + q1[3] * tb,
+            ])
         }
     };
-    if plan.source[1] == Source::Mixed {
+    // At `a == 0` an unnormalised copy already holds the fixed values in the lanes that are not
+    // animated; otherwise those lanes are taken from `fixed`.
+    if plan.source[1] == Source::Mixed && (a != 0.0 || raw_rotations) {
         let m = lanes(plan.animated[1]);
         for (i, v) in q.into_iter().enumerate() {
             out[R + i] = select(m, v, fixed[R + i]);
@@ -265,7 +266,6 @@ pub(crate) fn sample_block(
     } else {
         out[R..R + 4].copy_from_slice(&q);
     }
-    out
 }
 
 /// Vectors per accumulator block: translation 3, rotation 4, scale 3, total weight 1.

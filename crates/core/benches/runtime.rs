@@ -50,6 +50,23 @@ fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
         })
     });
 
+    // The same frame with clips keyed as Biped and motion-capture clips usually are: rotation on
+    // every joint, translation on the root only.
+    let mut anim_r = Animator::new(skeleton.clone());
+    let ra = anim_r.add_clip(Arc::new(rig::clip_rotations("walk", &skeleton, 0.0)));
+    let rb = anim_r.add_clip(Arc::new(rig::clip_rotations("wave", &skeleton, 1.0)));
+    anim_r.set_mask(ra, Some(lower.clone())).unwrap();
+    anim_r.set_mask(rb, Some(upper.clone())).unwrap();
+    anim_r.play(ra).unwrap();
+    anim_r.activate(rb).unwrap();
+    g.bench_function("animator_full_frame_root_translation", |bench| {
+        bench.iter(|| {
+            anim_r.update(black_box(1.0 / 60.0));
+            anim_r.evaluate_palette(&mut models, &mut palette).unwrap();
+            black_box(&palette);
+        })
+    });
+
     // The same work without the animator, step by step.
     let bind_a = ClipBinding::new(&walk, &skeleton);
     let bind_b = ClipBinding::new(&wave, &skeleton);

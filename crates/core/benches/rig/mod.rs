@@ -100,6 +100,16 @@ pub fn biped() -> Skeleton {
 
 /// A looping 1 s clip at 30 Hz (30 keys) animating translation and rotation of every joint.
 pub fn clip(name: &str, skeleton: &Skeleton, phase: f32) -> Clip {
+    clip_with(name, skeleton, phase, true)
+}
+
+/// As [`clip`], but translation is animated on the root only (the other joints keep their bind
+/// translation): how a Biped or motion-capture clip is usually keyed.
+pub fn clip_rotations(name: &str, skeleton: &Skeleton, phase: f32) -> Clip {
+    clip_with(name, skeleton, phase, false)
+}
+
+fn clip_with(name: &str, skeleton: &Skeleton, phase: f32, all_translations: bool) -> Clip {
     let times: Vec<f32> = (0..30).map(|k| k as f32 / 30.0).collect();
     let tracks = skeleton
         .names()
@@ -110,13 +120,17 @@ pub fn clip(name: &str, skeleton: &Skeleton, phase: f32) -> Clip {
             let angle = |t: f32| (t * std::f32::consts::TAU + phase + j as f32).sin() * 0.4;
             TrackCurves {
                 joint: n.clone(),
-                translation: Curve::new(
-                    times.clone(),
-                    times
-                        .iter()
-                        .map(|&t| bind.translation + Vec3::Y * angle(t) * 0.1)
-                        .collect(),
-                ),
+                translation: if all_translations || j == 0 {
+                    Curve::new(
+                        times.clone(),
+                        times
+                            .iter()
+                            .map(|&t| bind.translation + Vec3::Y * angle(t) * 0.1)
+                            .collect(),
+                    )
+                } else {
+                    Curve::default()
+                },
                 rotation: Curve::new(
                     times.clone(),
                     times

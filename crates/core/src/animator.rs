@@ -7,8 +7,12 @@
 //!
 //! Playing clips are **layers**. A layer has a time, a speed, a weight, an optional per-joint mask, and a
 //! fade factor (0..1, moved linearly by fades). Its effective weight is `weight * fade`. Non-additive
-//! layers are blended with [`BlendBuffers`]; additive layers are applied on top, in the order the clips
-//! were added (see [`crate::blend`]).
+//! layers are blended as [`crate::BlendBuffers`] blends layers sampled with
+//! [`Sampler::sample_layer`] (rotations as interpolated, normalised once after the blend); additive
+//! layers, sampled with [`Sampler::sample`], are applied on top, in the order the clips were added
+//! (see [`crate::blend`]). The result is the same bits as those per-joint functions (tested); the
+//! animator computes it four joints at a time (structure-of-arrays blocks), sampling a masked layer only where
+//! its mask reaches.
 //!
 //! One layer may be the **current** clip of the play sequence, with a **queue** of clips to play next.
 //! When the current clip ends — a non-looping clip reaching its duration, or a looping clip completing
@@ -590,10 +594,15 @@ fn blend_layers_generic(
         }
         let binding = s.masked.as_ref().unwrap_or(&s.binding);
         let mask = s.mask_blocks.as_deref();
-        s.sampler
-            .sample_each(&s.clip, binding, s.time, |pb, block| {
+        s.sampler.sample_each(
+            &s.clip,
+            binding,
+            s.time,
+            soa::Rotations::Interpolated,
+            |pb, block| {
                 soa::accumulate_block(accum, pb, block, w, mask);
-            })?;
+            },
+        )?;
     }
     soa::resolve(accum, bind, local);
     Ok(())

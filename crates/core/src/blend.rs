@@ -7,7 +7,13 @@
 //!    and a weight, optionally times a per-joint mask. For every driven joint the effective weight
 //!    `w = weight * mask[j]` is added to the joint's total; translation and scale are summed as
 //!    `w * value`; the rotation is summed as `w * q`, with `q` first negated when it points away from the
-//!    sum so far (`dot < 0`), which blends along the shortest path.
+//!    sum so far (`dot < 0`), which blends along the shortest path. Rotations are used as given; they
+//!    need not be unit. The [`crate::Animator`] feeds each layer's rotations as interpolated
+//!    ([`Sampler::sample_layer`](crate::Sampler::sample_layer): the shortest-path weighted sum of two
+//!    keys, not normalised), so a joint's rotation is the weighted sum of every contributing key,
+//!    normalised once in step 2. For one layer at full weight that is exactly
+//!    [`nlerp`](crate::clip::nlerp) of its two keys, what [`Sampler::sample`](crate::Sampler::sample)
+//!    returns.
 //! 2. [`BlendBuffers::resolve`] writes the result. For a joint whose total weight `W` is at least 1, the
 //!    sums are divided by `W` (the rotation sum is normalised, as `q * (1 / |q|)`, the runtime's
 //!    normalisation): weights are normalised. For `W < 1` the

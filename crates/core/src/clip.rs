@@ -681,7 +681,7 @@ impl PartialEq for Identity {
 /// A clip bound to a skeleton: for each track, the joint it drives. Made once, reused every frame.
 ///
 /// Besides the joint of each track it holds the sampler's *plan*: the blocks of four skeleton joints
-/// the clip drives (see [`crate::soa`]), per block and channel kind which lanes are animated and the
+/// the clip drives (structure-of-arrays blocks), per block and channel kind which lanes are animated and the
 /// values of the others (constants, bind values), and for every animated component of a driven joint
 /// where it sits in a (decoded) frame and where it goes in a block. Sampling then needs no per-joint
 /// matching and runs four joints per instruction.
@@ -1184,13 +1184,48 @@ impl Sampler {
 
     /// Samples the clip at playback time `t` into `out` (one transform per skeleton joint), writing only
     /// the joints the clip drives. Missing channels take the joint's bind value; for an additive clip they
-    /// take the identity difference.
+    /// take the identity difference. Rotations are normalised ([`nlerp`] between keys).
     pub fn sample(
         &mut self,
         clip: &Clip,
         binding: &ClipBinding,
         skeleton: &Skeleton,
         t: f32,
+        out: &mut [Transform],
+    ) -> Result<(), ClipError> {
+        self.sample_transforms(clip, binding, skeleton, t, soa::Rotations::Normalized, out)
+    }
+
+    /// [`Sampler::sample`] for a normal layer of a blend: the same translations and scales, and
+    /// rotations as interpolated, the shortest-path weighted sum of the two keys (a key as stored),
+    /// not normalised, because the blend normalises the sum of its layers once (see [`crate::blend`]).
+    /// This is what the [`crate::Animator`] blends, so [`crate::BlendBuffers`] fed with it gives the
+    /// animator's pose bit for bit.
+    pub fn sample_layer(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        skeleton: &Skeleton,
+        t: f32,
+        out: &mut [Transform],
+    ) -> Result<(), ClipError> {
+        self.sample_transforms(
+            clip,
+            binding,
+            skeleton,
+            t,
+            soa::Rotations::Interpolated,
+            out,
+        )
+    }
+
+    fn sample_transforms(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        skeleton: &Skeleton,
+        t: f32,
+        rotations: soa::Rotations,
         out: &mut [Transform],
     ) -> Result<(), ClipError> {
         if out.len() != skeleton.len() {
@@ -1202,7 +1237,7 @@ impl Sampler {
         if binding.skeleton_len != skeleton.len() {
             return Err(ClipError::BindingMismatch);
         }
-        self.sample_each(clip, binding, t, |pb, block| {
+        self.sample_each(clip, binding, t, rotations, |pb, block| {
             soa::write_transforms(
                 block,
                 pb.driven,
@@ -1227,7 +1262,7 @@ impl Sampler {
             out.resize(len, glam::Vec4::ZERO);
         }
         let mut blocks = out.chunks_exact_mut(soa::COMPONENTS);
-        self.sample_each(clip, binding, t, |_, block| {
+        self.sample_each(clip, binding, t, soa::Rotations::Normalized, |_, block| {
             if let Some(o) = blocks.next() {
                 o.copy_from_slice(block);
             }
@@ -1243,6 +1278,7 @@ impl Sampler {
         clip: &Clip,
         binding: &ClipBinding,
         t: f32,
+        rotations: soa::Rotations,
         mut f: impl FnMut(&PlanBlock, &soa::Block),
     ) -> Result<(), ClipError> {
         if binding.joint_of_track.len() != clip.tracks.len()
@@ -1266,7 +1302,7 @@ impl Sampler {
         let mut block = [glam::Vec4::ZERO; soa::COMPONENTS];
         for (pb, (b0, b1)) in binding.plan.iter().zip(blocks) {
             if let (Ok(b0), Ok(b1)) = (<&soa::Block>::try_from(b0), <&soa::Block>::try_from(b1)) {
-                soa::sample_block(pb, b0, b1, a, raw, &mut block);
+                soa::sample_block(pb, b0, b1, a, raw, rotations, &mut block);
                 f(pb, &block);
             }
         }

@@ -64,7 +64,7 @@ fn same_len(what: &'static str, expected: usize, got: usize) -> Result<(), SkinE
 /// [`Skeleton`](crate::Skeleton)).
 ///
 /// Joints are taken four at a time: their local matrices `T * R * S` are built together, one joint per
-/// SIMD lane (see [`local_matrices`]), then each joint's model matrix is its parent's times its local
+/// SIMD lane, then each joint's model matrix is its parent's times its local
 /// matrix, as the affine (3x4) product: it skips the terms that multiply the local matrix's zero bottom
 /// row, so for affine matrices the result is the full product's up to rounding. Same bits as
 /// [`local_to_model_and_palette`]'s `models`.

@@ -210,12 +210,24 @@ impl PlanBlock {
     }
 }
 
+/// How a sampled block's rotations come out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Rotations {
+    /// Normalised: [`crate::clip::nlerp`] between keys, a key normalised when the slots hold raw
+    /// (decoded compressed) rotations. What [`crate::Sampler::sample`] returns.
+    Normalized,
+    /// As interpolated: the shortest-path weighted sum of the two keys, not normalised (a key as
+    /// stored). What a blend takes: it normalises the sum of its layers once (see [`crate::blend`]).
+    Interpolated,
+}
+
 /// Samples one block from two key slots (`c0`, `c1`: [`COMPONENTS`] vectors each, with the fixed values
 /// in the lanes that are not animated) at weight `a` of `c1`, into `out`. `raw_rotations`: the slots
-/// hold unnormalised rotations (decoded compressed keys), normalised also at `a == 0`.
+/// hold unnormalised rotations (decoded compressed keys).
 ///
 /// Per lane this is [`crate::Sampler::sample`]'s arithmetic: `Vec3::lerp` for translation and scale,
-/// [`crate::clip::nlerp`] for rotation, a copy at `a == 0` and for values that are not animated.
+/// [`crate::clip::nlerp`] for rotation (or its weighted sum alone, see [`Rotations`]), a copy at
+/// `a == 0` and for values that are not animated.
 #[inline(always)]
 pub(crate) fn sample_block(
     plan: &PlanBlock,
@@ -223,6 +235,7 @@ pub(crate) fn sample_block(
     c1: &Block,
     a: f32,
     raw_rotations: bool,
+    rotations: Rotations,
     out: &mut Block,
 ) {
     let fixed = &plan.fixed;
@@ -241,24 +254,31 @@ pub(crate) fn sample_block(
             };
         }
     }
+    let normalize = rotations == Rotations::Normalized;
+    // A copy of key 0 (at `a == 0`, unless it must be normalised) already holds the fixed values in
+    // the lanes that are not animated; computed values take those lanes from `fixed`.
+    let copy = a == 0.0 && !(raw_rotations && normalize);
     let q = match plan.source[1] {
         Source::Fixed => [fixed[R], fixed[R + 1], fixed[R + 2], fixed[R + 3]],
-        _ if a == 0.0 && !raw_rotations => rotation(c0),
+        _ if copy => rotation(c0),
         _ if a == 0.0 => normalize_q(rotation(c0)),
         _ => {
             let (q0, q1) = (rotation(c0), rotation(c1));
             let q1 = negate_where_negative(q1, dot_q(&q0, &q1));
-            normalize_q([
+            let q = [
                 q0[0] * ta + q1[0] * tb,
                 q0[1] * ta + q1[1] * tb,
                 q0[2] * ta + q1[2] * tb,
                 q0[3] * ta + q1[3] * tb,
-            ])
+            ];
+            if normalize {
+                normalize_q(q)
+            } else {
+                q
+            }
         }
     };
-    // At `a == 0` an unnormalised copy already holds the fixed values in the lanes that are not
-    // animated; otherwise those lanes are taken from `fixed`.
-    if plan.source[1] == Source::Mixed && (a != 0.0 || raw_rotations) {
+    if plan.source[1] == Source::Mixed && !copy {
         let m = lanes(plan.animated[1]);
         for (i, v) in q.into_iter().enumerate() {
             out[R + i] = select(m, v, fixed[R + i]);

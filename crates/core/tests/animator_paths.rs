@@ -1,7 +1,7 @@
 //! The animator's four-joint block path (sampling, blending and local-to-model on blocks) against the
-//! per-joint functions a bake uses (`Sampler::sample`, `BlendBuffers`, `apply_additive`,
-//! `local_to_model_and_palette`): the same bits, frame after frame, with masks, partial and excess
-//! weights, cross-fades and additive layers.
+//! per-joint functions (`Sampler::sample_layer` and `Sampler::sample`, `BlendBuffers`,
+//! `apply_additive`, `local_to_model_and_palette`): the same bits, frame after frame, with masks,
+//! partial and excess weights, cross-fades and additive layers.
 
 #![allow(clippy::unwrap_used)] // helpers of tests
 
@@ -140,9 +140,14 @@ fn reference(
         }
         let binding = ClipBinding::new(clip, &skeleton);
         let t = anim.time(id).unwrap();
-        samplers[k]
-            .sample(clip, &binding, &skeleton, t, &mut poses[k])
-            .unwrap();
+        // Normal layers enter the blend with their rotations as interpolated; additive layers as
+        // sampled (normalised).
+        if clip.additive() {
+            samplers[k].sample(clip, &binding, &skeleton, t, &mut poses[k])
+        } else {
+            samplers[k].sample_layer(clip, &binding, &skeleton, t, &mut poses[k])
+        }
+        .unwrap();
         if clip.additive() {
             additive.push((k, binding, w));
             continue;

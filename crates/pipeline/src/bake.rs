@@ -1,7 +1,7 @@
-//! Baking skinned vertex caches: every frame of one or more clips (or of a blend of layers) skinned
-//! with the runtime's own functions ([`sinew_core::Sampler`], [`sinew_core::BlendBuffers`],
-//! [`sinew_core::local_to_model`], [`sinew_core::skinning_palette`], [`sinew_core::skin_lod`]) on the
-//! decoded [`Asset`], so that a cache can be checked bit for bit against what a game draws.
+//! Baking skinned vertex caches: every frame of one or more clips (or of a blend of layers) posed by the
+//! runtime's own [`sinew_core::Animator`] (its [`Animator::evaluate_palette`], the call a game makes
+//! each frame) and skinned with [`sinew_core::skin_lod`], on the decoded [`Asset`], so that a cache is
+//! bit for bit what a game draws.
 //!
 //! # Frames
 //!
@@ -11,12 +11,13 @@
 //! wraps to its start, as the runtime does. Clips are baked one after another in the requested order
 //! (file order when none is requested).
 //!
-//! A layered bake blends its layers per frame through [`BlendBuffers`]: normal layers accumulate with
-//! their weight times their mask (a MASK section entry of the file), then additive layers are applied.
+//! A layered bake plays its layers together in one animator: normal layers blend with their weight
+//! times their mask (a MASK section entry of the file), then additive layers are applied, in order.
 //! It runs over the duration (and at the sample rate, unless `fps` is given) of the first layer.
 //!
-//! Frames are skinned in parallel with rayon; every frame is computed from scratch (fresh sampler and
-//! pose), so the result is the same bits for any thread count.
+//! Frames are skinned in parallel with rayon; every frame is computed from scratch (a fresh copy of
+//! the segment's animator with every layer's time set), so the result is the same bits for any thread
+//! count.
 //!
 //! # Vertex order
 //!
@@ -29,9 +30,9 @@ use rayon::prelude::*;
 use sinew_core::format::Asset;
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{
-    apply_additive, local_to_model, skin_lod, skinning_palette, BlendBuffers, BlendError, Clip,
-    ClipBinding, ClipError, Layer, Lod, Sampler, SkinError, Transform,
+    skin_lod, Animator, AnimatorError, BlendError, Clip, ClipError, ClipId, Lod, SkinError,
 };
+use std::sync::Arc;
 
 /// Highest frame rate a bake accepts.
 pub const MAX_FPS: f32 = 1000.0;
@@ -208,6 +209,9 @@ pub enum BakeError {
     /// Blending failed.
     #[error("blending: {0}")]
     Blend(#[from] BlendError),
+    /// The animator refused a layer (a weight or mask that is not finite, ...).
+    #[error("layers: {0}")]
+    Animator(#[from] AnimatorError),
     /// Skinning failed.
     #[error("skinning: {0}")]
     Skin(#[from] SkinError),
@@ -249,17 +253,12 @@ pub fn check_fps(fps: f32, hint: &'static str) -> Result<f32, BakeError> {
     }
 }
 
-/// One layer resolved against the file.
-struct Resolved<'a> {
-    clip: &'a Clip,
-    binding: ClipBinding,
-    mask: Option<Vec<f32>>,
-    weight: f32,
-}
-
-/// One contiguous segment of the bake: layers sampled at the same times.
+/// One contiguous segment of the bake: layers played together, every layer at the same time.
 struct Segment<'a> {
-    layers: Vec<Resolved<'a>>,
+    clips: Vec<&'a Clip>,
+    /// The layers in one animator, all active, with their weights and masks.
+    animator: Animator,
+    layers: Vec<ClipId>,
     first_frame: usize,
     frame_count: usize,
     duration: f32,
@@ -324,8 +323,11 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
     };
     let mut segments = Vec::with_capacity(groups.len());
     let mut total = 0usize;
+    let shared = Arc::new(skeleton.clone());
     for g in groups {
+        let mut animator = Animator::new(shared.clone());
         let mut layers = Vec::with_capacity(g.len());
+        let mut clips = Vec::with_capacity(g.len());
         for (clip, mask, weight) in g {
             let mask = match mask {
                 Some(m) => Some(
@@ -339,16 +341,18 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
                 ),
                 None => None,
             };
-            layers.push(Resolved {
-                binding: ClipBinding::new(clip, skeleton),
-                clip,
-                mask,
-                weight,
-            });
+            let layer = animator.add_clip(Arc::new(clip.clone()));
+            animator.set_mask(layer, mask)?;
+            animator.set_weight(layer, weight)?;
+            animator.activate(layer)?;
+            layers.push(layer);
+            clips.push(clip);
         }
-        let duration = layers.first().map_or(0.0, |l| l.clip.duration());
+        let duration = clips.first().map_or(0.0, |c| c.duration());
         let n = frame_count(duration, fps);
         segments.push(Segment {
+            clips,
+            animator,
             layers,
             first_frame: total,
             frame_count: n,
@@ -363,14 +367,14 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
         .iter()
         .map(|s| ClipRange {
             name: s
-                .layers
+                .clips
                 .iter()
-                .map(|l| l.clip.name())
+                .map(|c| c.name())
                 .collect::<Vec<_>>()
                 .join("+"),
             first_frame: s.first_frame,
             frame_count: s.frame_count,
-            looping: s.layers.first().is_some_and(|l| l.clip.looping()),
+            looping: s.clips.first().is_some_and(|c| c.looping()),
             duration: s.duration,
         })
         .collect();
@@ -405,7 +409,7 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
             } else {
                 (pos, nor)
             };
-            skin_frame(skeleton, lod, &s.layers, t, p_out, n_out)?;
+            skin_frame(s, lod, t, p_out, n_out)?;
             if let Some(order) = &order {
                 for (o, &v) in order.iter().enumerate() {
                     pos[o] = scratch_p[v as usize];
@@ -486,78 +490,38 @@ fn output_order(
     Ok(Some(first))
 }
 
-/// Poses and skins one frame at clip time `t` with the runtime's functions.
+/// Poses and skins one frame at clip time `t`: a fresh copy of the segment's animator with every
+/// layer at `t`, its model matrices and palette for the frame, then the runtime's skinning.
 fn skin_frame(
-    skeleton: &sinew_core::Skeleton,
+    segment: &Segment<'_>,
     lod: &Lod,
-    layers: &[Resolved<'_>],
     t: f32,
     out_p: &mut [Vec3],
     out_n: &mut [Vec3],
 ) -> Result<(), BakeError> {
-    let bind = skeleton.bind_local();
-    let mut local = bind.to_vec();
-    let sample = |l: &Resolved<'_>| -> Result<Vec<Transform>, BakeError> {
-        let mut pose = if l.clip.additive() {
-            vec![Transform::IDENTITY; bind.len()]
-        } else {
-            bind.to_vec()
-        };
-        Sampler::new()
-            .sample(l.clip, &l.binding, skeleton, t, &mut pose)
-            .map_err(|source| BakeError::Clip {
-                clip: l.clip.name().to_string(),
-                source,
-            })?;
-        Ok(pose)
-    };
-    if let [only] = layers {
-        if only.mask.is_none() && only.weight == 1.0 && !only.clip.additive() {
-            // A single clip: what a game does when it plays one clip.
-            local = sample(only)?;
-        } else {
-            blend(skeleton, layers, &sample, &mut local)?;
-        }
-    } else {
-        blend(skeleton, layers, &sample, &mut local)?;
+    let mut animator = segment.animator.clone();
+    for &layer in &segment.layers {
+        animator.set_time(layer, t)?;
     }
-    let mut models = vec![Mat4::IDENTITY; bind.len()];
-    local_to_model(skeleton.parents(), &local, &mut models)?;
-    let mut palette = vec![Mat4::IDENTITY; bind.len()];
-    skinning_palette(&models, skeleton.inverse_bind(), &mut palette)?;
+    let n = animator.skeleton().len();
+    let mut models = vec![Mat4::IDENTITY; n];
+    let mut palette = vec![Mat4::IDENTITY; n];
+    animator
+        .evaluate_palette(&mut models, &mut palette)
+        .map_err(|e| match e {
+            AnimatorError::Clip(source) => BakeError::Clip {
+                clip: segment
+                    .clips
+                    .iter()
+                    .map(|c| c.name())
+                    .collect::<Vec<_>>()
+                    .join("+"),
+                source,
+            },
+            other => BakeError::Animator(other),
+        })?;
     skin_lod(&palette, lod, out_p, out_n)?;
     Ok(())
-}
-
-fn blend(
-    skeleton: &sinew_core::Skeleton,
-    layers: &[Resolved<'_>],
-    sample: &dyn Fn(&Resolved<'_>) -> Result<Vec<Transform>, BakeError>,
-    out: &mut [Transform],
-) -> Result<(), BakeError> {
-    let poses = layers.iter().map(sample).collect::<Result<Vec<_>, _>>()?;
-    let mut buffers = BlendBuffers::new(skeleton.len());
-    buffers.reset();
-    for lp in layers
-        .iter()
-        .zip(&poses)
-        .filter(|(l, _)| !l.clip.additive())
-    {
-        buffers.accumulate(&layer(lp))?;
-    }
-    buffers.resolve(skeleton.bind_local(), out)?;
-    for lp in layers.iter().zip(&poses).filter(|(l, _)| l.clip.additive()) {
-        apply_additive(out, &layer(lp))?;
-    }
-    Ok(())
-}
-
-fn layer<'a>((l, p): (&'a Resolved<'_>, &'a Vec<Transform>)) -> Layer<'a> {
-    let x = Layer::new(p, l.binding.driven()).with_weight(l.weight);
-    match &l.mask {
-        Some(m) => x.with_mask(m),
-        None => x,
-    }
 }
 
 /// The mesh as Wavefront OBJ: `v` lines (bind-pose positions in the bake's vertex order) and `f` lines

@@ -1,7 +1,7 @@
 //! The `.sinew` container, version 1: a little-endian, sectioned, checksummed binary file holding a
 //! skeleton, materials, meshes with their LOD chains, and clips. `docs/format.md` documents every byte.
 //!
-//! - [`write`] turns an [`Asset`] into bytes. It is deterministic: the same asset gives the same bytes.
+//! - [`write`](fn@write) turns an [`Asset`] into bytes. It is deterministic: the same asset gives the same bytes.
 //! - [`read`] turns bytes into an [`Asset`]. It takes untrusted input: every count is checked against
 //!   the bytes present before anything is allocated, every section's CRC-32 is verified, and every
 //!   failure is a [`FormatError`] naming the section, the byte offset and what is wrong. It never panics.
@@ -229,7 +229,7 @@ impl Asset {
     }
 }
 
-/// Checks everything [`read`] checks on decoded data, so that whatever [`write`] accepts reads back.
+/// Checks everything [`read`] checks on decoded data, so that whatever [`write`](fn@write) accepts reads back.
 ///
 /// Rules: every mesh has at least one LOD; per LOD, normals/UVs/joints are empty or one per vertex,
 /// joints and weights come together, the index count is a multiple of three, every index is below the

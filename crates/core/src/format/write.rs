@@ -333,7 +333,7 @@ pub(crate) const CLIP_QUANTIZED: u32 = 4;
 /// Compressed track table kind: quantized animated channel.
 pub(crate) const KIND_QUANTIZED: u8 = 3;
 
-/// Bytes of one clip record as [`write`] lays it out (from the record's first byte to the end of its
+/// Bytes of one clip record as [`write`](fn@write) lays it out (from the record's first byte to the end of its
 /// data, alignment padding before it not counted; joint names live in the string table and are not
 /// counted). Plain and compressed clips alike: this is the size `convert` reports.
 pub fn clip_record_size(clip: &Clip) -> usize {

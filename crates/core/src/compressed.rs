@@ -74,8 +74,31 @@ pub(crate) struct Quantized {
     seg: Vec<(usize, usize)>,
     /// Per segment, per component.
     dec: Vec<Dec>,
+    /// Per segment, per channel (group of three components): everything decoding it needs, side by
+    /// side, so that [`Quantized::decode_into`] streams through one array.
+    channels: Vec<ChannelDec>,
     /// `parts.data` followed by 8 zero bytes, so that every read is one unaligned 8-byte load.
     padded: Vec<u8>,
+}
+
+/// How one channel (three components) decodes in one segment.
+#[derive(Debug, Clone, Copy, Default)]
+struct ChannelDec {
+    /// Bit offsets of the three components inside a key record.
+    off: [u32; 3],
+    /// Masks of their bit widths.
+    mask: [u32; 3],
+    /// Their bit widths.
+    bits: [u8; 3],
+    scale: [f32; 3],
+    bias: [f32; 3],
+    /// Where the channel's values start in a decoded key.
+    dest: u32,
+    /// True for a rotation (its 2-bit index sits right before its first component).
+    rotation: bool,
+    /// The channel's bits (index and components, which are contiguous) fit one 8-byte load from
+    /// any bit position (at most 57 bits).
+    one_load: bool,
 }
 
 impl PartialEq for Quantized {
@@ -125,18 +148,19 @@ pub fn from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
     raw_from_smallest_three(index, v).normalize()
 }
 
-/// Where x y z w come from in `[v0, v1, v2, w]`, per index of the largest component.
-const PERM: [[usize; 4]; 4] = [[3, 0, 1, 2], [0, 3, 1, 2], [0, 1, 3, 2], [0, 1, 2, 3]];
-
 /// [`from_smallest_three`] without the final normalisation (unit up to quantization error).
 #[inline]
 pub(crate) fn raw_from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
     let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2])
         .max(0.0)
         .sqrt();
-    let src = [v[0], v[1], v[2], w];
-    let p = PERM[(index & 3) as usize];
-    Quat::from_xyzw(src[p[0]], src[p[1]], src[p[2]], src[p[3]])
+    // `index` names the component that was dropped; the other three follow in order.
+    match index & 3 {
+        0 => Quat::from_xyzw(w, v[0], v[1], v[2]),
+        1 => Quat::from_xyzw(v[0], w, v[1], v[2]),
+        2 => Quat::from_xyzw(v[0], v[1], w, v[2]),
+        _ => Quat::from_xyzw(v[0], v[1], v[2], w),
+    }
 }
 
 /// Bit offsets of every component inside a key record, and the record size. `rotation_starts[c]` is
@@ -286,7 +310,34 @@ impl Quantized {
             group_rot.push(rot);
             decoded_stride += if rot { 4 } else { 3 };
         }
+        let channels = dec
+            .chunks_exact(3)
+            .enumerate()
+            .map(|(i, d)| {
+                let g = i % (comps / 3).max(1);
+                let rotation = group_rot.get(g).copied().unwrap_or(false);
+                let bits = [0, 1, 2].map(|i| d[i].mask.count_ones() as u8);
+                let run = u32::from(bits[0])
+                    + u32::from(bits[1])
+                    + u32::from(bits[2])
+                    + if rotation { ROTATION_INDEX_BITS } else { 0 };
+                ChannelDec {
+                    off: [d[0].off, d[1].off, d[2].off],
+                    mask: [d[0].mask, d[1].mask, d[2].mask],
+                    bits,
+                    scale: [d[0].scale, d[1].scale, d[2].scale],
+                    bias: [d[0].bias, d[1].bias, d[2].bias],
+                    dest: group_dest.get(g).copied().unwrap_or(0),
+                    rotation,
+                    one_load: run <= 57
+                        && d[1].off == d[0].off + u32::from(bits[0])
+                        && d[2].off == d[1].off + u32::from(bits[1])
+                        && (!rotation || d[0].off >= ROTATION_INDEX_BITS),
+                }
+            })
+            .collect();
         Ok(Quantized {
+            channels,
             decoded_stride,
             group_dest,
             group_rot,
@@ -318,16 +369,61 @@ impl Quantized {
     /// Decodes key `k` into `out` (at least [`Quantized::decoded_stride`] floats): per channel, the
     /// values [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give, bit for bit.
     pub(crate) fn decode_into(&self, k: usize, out: &mut [f32]) {
-        let key = self.key(k);
-        for (g, (&dest, &rot)) in self.group_dest.iter().zip(&self.group_rot).enumerate() {
-            let c = g * 3;
-            let d = dest as usize;
-            if rot {
-                if let Some(slot) = out.get_mut(d..d + 4) {
-                    slot.copy_from_slice(&key.quat_raw(c).to_array());
+        let groups = self.components / 3;
+        let seg_len = (self.parts.segment_len as usize).max(1);
+        let s = k / seg_len;
+        let (Some(&(start, record)), Some(channels)) = (
+            self.seg.get(s),
+            self.channels.get(s * groups..(s + 1) * groups),
+        ) else {
+            return;
+        };
+        let base = start + (k - s * seg_len) * record;
+        let data = &self.padded[..];
+        // Every field lies inside the data (checked when the payload was read), which is followed by
+        // 8 zero bytes, so one 8-byte load from a field's first byte holds 57 bits or more of it.
+        let read = |bit: usize| -> u64 {
+            data.get(bit >> 3..)
+                .and_then(<[u8]>::first_chunk::<8>)
+                .map_or(0, |b| u64::from_le_bytes(*b))
+                >> (bit & 7)
+        };
+        for ch in channels {
+            let (index, q) = if ch.one_load {
+                // Index (for a rotation) and the three components, in one load.
+                let first = base + ch.off[0] as usize;
+                let at = if ch.rotation { first - 2 } else { first };
+                let mut word = read(at);
+                let index = if ch.rotation {
+                    let i = (word & 3) as u32;
+                    word >>= 2;
+                    i
+                } else {
+                    0
+                };
+                let q0 = word as u32 & ch.mask[0];
+                word >>= ch.bits[0];
+                let q1 = word as u32 & ch.mask[1];
+                word >>= ch.bits[1];
+                (index, [q0, q1, word as u32 & ch.mask[2]])
+            } else {
+                let index = if ch.rotation {
+                    (read((base + ch.off[0] as usize).saturating_sub(2)) & 3) as u32
+                } else {
+                    0
+                };
+                let q = [0, 1, 2].map(|i| read(base + ch.off[i] as usize) as u32 & ch.mask[i]);
+                (index, q)
+            };
+            let v = [0, 1, 2].map(|i| ch.bias[i] + ch.scale[i] * q[i] as f32);
+            let dest = ch.dest as usize;
+            if ch.rotation {
+                let q = raw_from_smallest_three(index, v);
+                if let Some(o) = out.get_mut(dest..dest + 4) {
+                    o.copy_from_slice(&q.to_array());
                 }
-            } else if let Some(slot) = out.get_mut(d..d + 3) {
-                slot.copy_from_slice(&key.vec3(c).to_array());
+            } else if let Some(o) = out.get_mut(dest..dest + 3) {
+                o.copy_from_slice(&v);
             }
         }
     }
@@ -383,7 +479,7 @@ impl KeyRef<'_> {
     /// The rotation whose first component is `c`.
     #[inline]
     pub(crate) fn quat(&self, c: usize) -> Quat {
-        self.quat_raw(c).normalize()
+        crate::clip::normalize_rotation(self.quat_raw(c))
     }
     /// [`KeyRef::quat`] before normalisation (for callers that normalise after blending).
     #[inline]

@@ -628,6 +628,38 @@ impl Clip {
         }
     }
 
+    /// For a compressed clip, where each channel starts in a decoded key, then the key's size; empty
+    /// for a plain clip.
+    fn channel_starts(&self) -> Vec<u32> {
+        match &self.quantized {
+            None => Vec::new(),
+            Some(q) => q
+                .group_dest
+                .iter()
+                .copied()
+                .chain([q.decoded_stride as u32])
+                .collect(),
+        }
+    }
+
+    /// For a compressed clip, the channels whose decoded values the `(source, destination)` moves
+    /// read, ascending; empty for a plain clip.
+    fn channels_read(&self, gather: &[(u32, u32)]) -> Vec<u32> {
+        let Some(q) = &self.quantized else {
+            return Vec::new();
+        };
+        let mut channels: Vec<u32> = gather
+            .iter()
+            .filter_map(|&(src, _)| {
+                let c = q.group_dest.partition_point(|&start| start <= src);
+                c.checked_sub(1).map(|c| c as u32)
+            })
+            .collect();
+        channels.sort_unstable();
+        channels.dedup();
+        channels
+    }
+
     /// Floats per frame the sampler reads (plain stride, or a decoded key's size).
     fn frame_stride(&self) -> usize {
         match &self.quantized {
@@ -701,6 +733,11 @@ pub struct ClipBinding {
     /// the block has the same animated channels, single vectors elsewhere.
     blocks: Vec<GatherBlock>,
     vectors: Vec<GatherVector>,
+    /// For a compressed clip: the channels `gather` reads, ascending (the only ones a key decodes).
+    channels: Vec<u32>,
+    /// For a compressed clip: where each channel starts in a decoded key (one entry per channel, then
+    /// the decoded key's size).
+    channel_starts: Vec<u32>,
     id: Identity,
 }
 
@@ -894,7 +931,11 @@ impl ClipBinding {
             .collect();
         gather.sort_unstable();
         let (blocks, vectors) = gather_plan(&plan, &gather);
+        let channels = clip.channels_read(&gather);
+        let channel_starts = clip.channel_starts();
         ClipBinding {
+            channels,
+            channel_starts,
             joint_of_track,
             unmatched,
             driven,
@@ -950,7 +991,19 @@ impl ClipBinding {
             })
             .collect();
         let (blocks, vectors) = gather_plan(&plan, &gather);
+        // The channels this binding still reads: those of the kept moves.
+        let channels = self
+            .channels
+            .iter()
+            .copied()
+            .filter(|&c| {
+                let (lo, hi) = (self.channel_start(c), self.channel_start(c + 1));
+                gather.iter().any(|&(src, _)| src >= lo && src < hi)
+            })
+            .collect();
         ClipBinding {
+            channels,
+            channel_starts: self.channel_starts.clone(),
             joint_of_track: self.joint_of_track.clone(),
             unmatched: self.unmatched.clone(),
             driven: self
@@ -967,6 +1020,14 @@ impl ClipBinding {
             gather,
             id: Identity::new(),
         }
+    }
+
+    /// Where channel `c` starts in a decoded key (for a compressed clip).
+    fn channel_start(&self, c: u32) -> u32 {
+        self.channel_starts
+            .get(c as usize)
+            .copied()
+            .unwrap_or(u32::MAX)
     }
 
     /// The clip's track names that matched no joint.
@@ -1079,7 +1140,7 @@ impl KeyCache {
             }
             Some(q) => {
                 self.decoded.resize(q.decoded_stride + FRAME_PAD, 0.0);
-                q.decode_into(k, &mut self.decoded);
+                q.decode_into(k, &binding.channels, &mut self.decoded);
                 &self.decoded
             }
         };
@@ -1769,6 +1830,35 @@ mod tests {
         assert_eq!(out[0].translation, q.key(2).vec3(0));
         assert_eq!(out[1].rotation, q.key(2).quat(3));
         assert_eq!(out[1].scale, q.key(2).vec3(6));
+    }
+
+    #[test]
+    fn a_restricted_binding_decodes_only_its_channels_and_samples_the_same_values() {
+        let sk = skeleton();
+        for c in [
+            compressed(false, false),
+            compressed(true, false),
+            compressed(false, true),
+        ] {
+            let full = ClipBinding::new(&c, &sk);
+            for keep in [0u16, 1] {
+                let part = full.restricted(|j| j == keep);
+                assert!(part.channels.len() < full.channels.len());
+                let (mut a, mut b) = (Sampler::new(), Sampler::new());
+                for i in 0..40 {
+                    let t = i as f32 * 0.037;
+                    let marker = Transform::from_translation(Vec3::splat(9.0));
+                    let mut want = vec![marker; sk.len()];
+                    let mut got = vec![marker; sk.len()];
+                    a.sample(&c, &full, &sk, t, &mut want).unwrap();
+                    b.sample(&c, &part, &sk, t, &mut got).unwrap();
+                    let j = keep as usize;
+                    assert_eq!(bits(&got[j..j + 1]), bits(&want[j..j + 1]), "{t}");
+                    // The other joint is not written.
+                    assert_eq!(got[1 - j], marker);
+                }
+            }
+        }
     }
 
     #[test]

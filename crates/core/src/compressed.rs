@@ -366,9 +366,11 @@ impl Quantized {
         }
     }
 
-    /// Decodes key `k` into `out` (at least [`Quantized::decoded_stride`] floats): per channel, the
-    /// values [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give, bit for bit.
-    pub(crate) fn decode_into(&self, k: usize, out: &mut [f32]) {
+    /// Decodes the channels `only` (channel numbers: component / 3) of key `k` into `out` (at least
+    /// [`Quantized::decoded_stride`] floats, each channel at its place in the decoded layout): per
+    /// channel, the values [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give, bit for bit. A sampler
+    /// decodes only the channels its binding reads (a masked layer, a partial skeleton).
+    pub(crate) fn decode_into(&self, k: usize, only: &[u32], out: &mut [f32]) {
         let groups = self.components / 3;
         let seg_len = (self.parts.segment_len as usize).max(1);
         let s = k / seg_len;
@@ -388,7 +390,7 @@ impl Quantized {
                 .map_or(0, |b| u64::from_le_bytes(*b))
                 >> (bit & 7)
         };
-        for ch in channels {
+        for ch in only.iter().filter_map(|&c| channels.get(c as usize)) {
             let (index, q) = if ch.one_load {
                 // Index (for a rotation) and the three components, in one load.
                 let first = base + ch.off[0] as usize;

@@ -1,5 +1,6 @@
 //! Sampling a compressed clip vs the same clip as plain f32 keys, on a 40-joint skeleton (two clips per
-//! iteration, as in sinew-core's `runtime` bench). Lives in sinew-pipeline because the encoder does.
+//! iteration, as in sinew-core's `runtime` bench), and the core benchmark's animator frame (two masked
+//! layers, local-to-model and palette) with either. Lives in sinew-pipeline because the encoder does.
 //! Figures are in docs/performance.md ("Clip compression").
 //!
 //! `cargo bench -p sinew-pipeline --bench clip_sampling -- --warm-up-time 1 --measurement-time 3`
@@ -7,10 +8,13 @@
 #![allow(clippy::unwrap_used)] // benchmark set-up on known-good data
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use sinew_core::glam::{Quat, Vec3};
-use sinew_core::{Clip, ClipBinding, Curve, JointDesc, Sampler, Skeleton, TrackCurves, Transform};
+use sinew_core::glam::{Mat4, Quat, Vec3};
+use sinew_core::{
+    Animator, Clip, ClipBinding, Curve, JointDesc, Sampler, Skeleton, TrackCurves, Transform,
+};
 use sinew_pipeline::compress::{compress_clip, CompressOptions};
 use std::hint::black_box;
+use std::sync::Arc;
 
 /// 40 joints: a spine of 8, two arms and two legs of 8 joints each, about 72 units tall.
 fn skeleton() -> Skeleton {
@@ -117,6 +121,40 @@ fn sampling(c: &mut Criterion) {
                         .unwrap();
                 }
                 black_box(&out);
+            })
+        });
+    }
+    // The core benchmark's frame on this rig: the two clips in an animator, one on the spine and
+    // arms, the other on the legs (complementary masks), then local-to-model and the palette.
+    let n = s.len();
+    let upper: Vec<f32> = (0..n)
+        .map(|j| {
+            if s.names()[j].starts_with("l2") || s.names()[j].starts_with("l3") {
+                0.0
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let lower: Vec<f32> = upper.iter().map(|m| 1.0 - m).collect();
+    for (label, clips) in [
+        ("plain_animator_frame_40_joints", &plain),
+        ("compressed_animator_frame_40_joints", &compressed),
+    ] {
+        let mut anim = Animator::new(Arc::new(s.clone()));
+        let a = anim.add_clip(Arc::new(clips[0].with_looping(true)));
+        let b = anim.add_clip(Arc::new(clips[1].with_looping(true)));
+        anim.set_mask(a, Some(upper.clone())).unwrap();
+        anim.set_mask(b, Some(lower.clone())).unwrap();
+        anim.play(a).unwrap();
+        anim.activate(b).unwrap();
+        let mut models = vec![Mat4::IDENTITY; n];
+        let mut palette = vec![Mat4::IDENTITY; n];
+        g.bench_function(label, |bench| {
+            bench.iter(|| {
+                anim.update(black_box(1.0 / 60.0));
+                anim.evaluate_palette(&mut models, &mut palette).unwrap();
+                black_box(&palette);
             })
         });
     }

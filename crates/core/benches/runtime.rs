@@ -42,6 +42,15 @@ fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let mut palette = vec![Mat4::IDENTITY; n];
 
     let mut g = c.benchmark_group(format!("{clock}/frame_40_joints"));
+    sinew_core::set_baseline_only(true);
+    g.bench_function("animator_full_frame_baseline_sse2", |bench| {
+        bench.iter(|| {
+            anim.update(black_box(1.0 / 60.0));
+            anim.evaluate_palette(&mut models, &mut palette).unwrap();
+            black_box(&palette);
+        })
+    });
+    sinew_core::set_baseline_only(false);
     g.bench_function("animator_full_frame", |bench| {
         bench.iter(|| {
             anim.update(black_box(1.0 / 60.0));
@@ -173,6 +182,17 @@ fn skinning<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
             black_box((&out_p, &out_n));
         })
     });
+    sinew_core::set_baseline_only(true);
+    g.bench_function("lbs4_positions_normals_100k_baseline_sse2", |bench| {
+        bench.iter(|| {
+            skin(
+                &palette, &positions, &normals, &joints, &weights, &mut out_p, &mut out_n,
+            )
+            .unwrap();
+            black_box((&out_p, &out_n));
+        })
+    });
+    sinew_core::set_baseline_only(false);
     g.bench_function("lbs4_positions_normals_100k_before", |bench| {
         bench.iter(|| {
             before::skin(

@@ -32,8 +32,18 @@ macro_rules! multiversion {
 }
 pub(crate) use multiversion;
 
-/// True when the AVX copies may run: the CPU has AVX (and, in this crate's unit tests, the calling
-/// thread has not asked for the baseline).
+/// Set by [`set_baseline_only`].
+static BASELINE_ONLY: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Makes every multiversioned function run its baseline copy (`true`) or pick by CPU again
+/// (`false`), process-wide. Results are the same bits either way; this exists to measure what the
+/// AVX copies gain and to check a build on a machine without AVX.
+pub fn set_baseline_only(yes: bool) {
+    BASELINE_ONLY.store(yes, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// True when the AVX copies may run: the CPU has AVX, [`set_baseline_only`] was not asked for it
+/// (and, in this crate's unit tests, the calling thread has not asked for the baseline).
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub(crate) fn use_avx() -> bool {
@@ -41,7 +51,8 @@ pub(crate) fn use_avx() -> bool {
     if BASELINE.with(|b| b.get()) {
         return false;
     }
-    std::arch::is_x86_feature_detected!("avx")
+    !BASELINE_ONLY.load(std::sync::atomic::Ordering::Relaxed)
+        && std::arch::is_x86_feature_detected!("avx")
 }
 
 #[cfg(test)]

@@ -1692,7 +1692,32 @@ mod tests {
     /// A compressed clip built by hand: root translation (3 components), arm rotation (3) and arm scale
     /// (3), 5 keys in segments of 2, pseudo-random quantized values.
     fn compressed(looping: bool, additive: bool) -> Clip {
-        let tracks = vec![
+        compressed_with(compressed_tracks(), looping, additive, &[0, 3, 7, 12, 16])
+    }
+
+    /// Both joints animate translation and rotation (and scale with `scale`): every block of the key
+    /// slots loads by transposition.
+    fn compressed_uniform(scale: bool, bits: &[u8]) -> Clip {
+        let per = if scale { 9 } else { 6 };
+        let tracks = ["root", "arm"]
+            .iter()
+            .enumerate()
+            .map(|(i, n)| Track {
+                joint: (*n).into(),
+                translation: Channel::Animated((i * per) as u32),
+                rotation: Channel::Animated((i * per + 3) as u32),
+                scale: if scale {
+                    Channel::Animated((i * per + 6) as u32)
+                } else {
+                    Channel::Bind
+                },
+            })
+            .collect();
+        compressed_with(tracks, true, false, bits)
+    }
+
+    fn compressed_tracks() -> Vec<Track> {
+        vec![
             Track {
                 joint: "root".into(),
                 translation: Channel::Animated(0),
@@ -1711,13 +1736,19 @@ mod tests {
                 rotation: Channel::Bind,
                 scale: Channel::Bind,
             },
-        ];
+        ]
+    }
+
+    /// A compressed clip built by hand over `tracks`: 5 keys in segments of 2, bit widths cycling
+    /// through `bits`, pseudo-random quantized values and rotation indices.
+    fn compressed_with(tracks: Vec<Track>, looping: bool, additive: bool, bits: &[u8]) -> Clip {
         let starts = rotation_starts(&tracks).unwrap();
         let keys = 5;
         let comps = starts.len();
+        let rotations = starts.iter().filter(|&&r| r).count();
         let segs: Vec<SegmentComponent> = (0..3 * comps)
             .map(|i| SegmentComponent {
-                bits: [0, 3, 7, 12, 16][i % 5],
+                bits: bits[i % bits.len()],
                 min: (i * 13 % 40) as u8,
                 extent: 200,
             })
@@ -1733,7 +1764,9 @@ mod tests {
                 q.push(if bits == 0 { 0 } else { x % (1 << bits) });
             }
         }
-        let index = [0u8, 3, 1, 2, 3];
+        let index: Vec<u8> = (0..keys * rotations)
+            .map(|i| [0u8, 3, 1, 2, 3][i % 5])
+            .collect();
         let data = crate::compressed::pack(keys, 2, &segs, &starts, &q, &index);
         let mut ranges = vec![[-0.5f32, 1.0]; comps];
         ranges[0] = [-3.0, 7.5];
@@ -1799,6 +1832,17 @@ mod tests {
         }
         for (l, a) in [(false, false), (true, false), (false, true)] {
             let c = compressed(l, a);
+            clips.push(c.to_plain());
+            clips.push(c);
+        }
+        // Uniform channels (whole blocks by transposition); the last with channels too wide for
+        // one 8-byte read.
+        for (scale, bits) in [
+            (false, &[0u8, 3, 7, 12, 16][..]),
+            (true, &[5, 9, 14][..]),
+            (true, &[24, 23, 24, 1][..]),
+        ] {
+            let c = compressed_uniform(scale, bits);
             clips.push(c.to_plain());
             clips.push(c);
         }

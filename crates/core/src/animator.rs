@@ -500,24 +500,25 @@ impl Animator {
         models: &mut [Mat4],
         palette: &mut [Mat4],
     ) -> Result<(), AnimatorError> {
-        let skeleton = self.skeleton.clone();
         if self.slots.iter().any(|s| s.active && s.clip.additive()) {
             let mut locals = std::mem::take(&mut self.locals);
             let result = self.evaluate(&mut locals);
             self.locals = locals;
             result?;
             skinning::local_to_model_and_palette(
-                skeleton.parents(),
+                self.skeleton.parents(),
                 &self.locals,
-                skeleton.inverse_bind(),
+                self.skeleton.inverse_bind(),
                 models,
                 palette,
             )?;
             return Ok(());
         }
         self.blend_normal_layers()?;
+        // Field by field, so that the skeleton is borrowed, not cloned (an `Arc` clone is two atomic
+        // operations per frame).
         skinning::local_to_model_and_palette_blocks(
-            &skeleton,
+            &self.skeleton,
             &self.local,
             &mut self.local_matrices,
             models,

@@ -25,7 +25,7 @@
 //! rotation to apply before the base rotation (`delta * base`), and a scale factor. Missing channels of an
 //! additive clip are the identity difference.
 
-use crate::compressed::{Quantized, QuantizedParts};
+use crate::compressed::{LaneTable, Quantized, QuantizedParts};
 use crate::skeleton::{JointIndex, Skeleton};
 use crate::soa::{self, PlanBlock};
 use crate::Transform;
@@ -617,7 +617,7 @@ impl Clip {
     }
 
     /// Where an animated channel's values start in a frame the sampler reads: the plain frame offset, or
-    /// for a compressed clip the offset inside a decoded key (see [`Quantized::decode_into`]).
+    /// for a compressed clip the offset inside a key decoded to f32 (see [`Quantized::decode_lanes`]).
     fn frame_offset(&self, o: u32) -> usize {
         match &self.quantized {
             None => o as usize,
@@ -626,38 +626,6 @@ impl Clip {
                 .get(o as usize / 3)
                 .map_or(usize::MAX / 2, |&d| d as usize),
         }
-    }
-
-    /// For a compressed clip, where each channel starts in a decoded key, then the key's size; empty
-    /// for a plain clip.
-    fn channel_starts(&self) -> Vec<u32> {
-        match &self.quantized {
-            None => Vec::new(),
-            Some(q) => q
-                .group_dest
-                .iter()
-                .copied()
-                .chain([q.decoded_stride as u32])
-                .collect(),
-        }
-    }
-
-    /// For a compressed clip, the channels whose decoded values the `(source, destination)` moves
-    /// read, ascending; empty for a plain clip.
-    fn channels_read(&self, gather: &[(u32, u32)]) -> Vec<u32> {
-        let Some(q) = &self.quantized else {
-            return Vec::new();
-        };
-        let mut channels: Vec<u32> = gather
-            .iter()
-            .filter_map(|&(src, _)| {
-                let c = q.group_dest.partition_point(|&start| start <= src);
-                c.checked_sub(1).map(|c| c as u32)
-            })
-            .collect();
-        channels.sort_unstable();
-        channels.dedup();
-        channels
     }
 
     /// Floats per frame the sampler reads (plain stride, or a decoded key's size).
@@ -733,12 +701,42 @@ pub struct ClipBinding {
     /// the block has the same animated channels, single vectors elsewhere.
     blocks: Vec<GatherBlock>,
     vectors: Vec<GatherVector>,
-    /// For a compressed clip: the channels `gather` reads, ascending (the only ones a key decodes).
-    channels: Vec<u32>,
-    /// For a compressed clip: where each channel starts in a decoded key (one entry per channel, then
-    /// the decoded key's size).
-    channel_starts: Vec<u32>,
+    /// For a compressed clip (whose keys load without `blocks` and `vectors`): per plan block and
+    /// animated kind, the channel each lane decodes, in plan order.
+    decode: Vec<DecodeBlock>,
     id: Identity,
+}
+
+/// Four lanes of one plan block that a compressed key decodes straight into, one channel kind.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct DecodeBlock {
+    /// Vector index inside a key slot of the kind's first component.
+    first: u32,
+    /// Per lane: the compressed channel (component / 3) decoded into it, where `lanes` is set.
+    channel: [u32; 4],
+    /// The animated lanes (the others keep their fixed values).
+    lanes: u8,
+    rotation: bool,
+}
+
+/// The [`DecodeBlock`]s of `plan`: `channel_of(joint, kind)` names the compressed channel animating a
+/// joint's kind (translation, rotation, scale) in the lanes the plan marks animated.
+fn decode_plan(plan: &[PlanBlock], channel_of: impl Fn(usize, usize) -> u32) -> Vec<DecodeBlock> {
+    let mut out = Vec::new();
+    for (p, pb) in plan.iter().enumerate() {
+        for (kind, first) in [soa::T, soa::R, soa::S].into_iter().enumerate() {
+            let lanes = pb.animated[kind] & pb.driven;
+            if lanes != 0 {
+                out.push(DecodeBlock {
+                    first: (p * soa::COMPONENTS + first) as u32,
+                    channel: [0, 1, 2, 3].map(|l| channel_of(pb.block * 4 + l, kind)),
+                    lanes,
+                    rotation: kind == 1,
+                });
+            }
+        }
+    }
+    out
 }
 
 /// A block of a key slot loaded by transposition: lane `l`'s animated floats are contiguous in a frame
@@ -852,6 +850,8 @@ impl ClipBinding {
         // (frame offset, joint, component within the block) before blocks get their plan positions.
         let mut gather: Vec<(usize, usize, usize)> = Vec::new();
         let identity = Transform::IDENTITY;
+        // Per joint and kind: the compressed channel animating it.
+        let mut channel_of = vec![[0u32; 3]; skeleton.len()];
         for t in &clip.tracks {
             let j = skeleton.find(&t.joint);
             joint_of_track.push(j);
@@ -904,6 +904,9 @@ impl ClipBinding {
                 }
                 if let Some(o) = anim {
                     pb.animated[kind] |= 1 << lane;
+                    if let Some(c) = channel_of.get_mut(ju) {
+                        c[kind] = o / 3;
+                    }
                     let at = clip.frame_offset(o);
                     for c in 0..n {
                         gather.push((at.saturating_add(c), ju, first + c));
@@ -930,12 +933,15 @@ impl ClipBinding {
             })
             .collect();
         gather.sort_unstable();
-        let (blocks, vectors) = gather_plan(&plan, &gather);
-        let channels = clip.channels_read(&gather);
-        let channel_starts = clip.channel_starts();
+        let (blocks, vectors, decode) = if clip.quantized.is_some() {
+            let decode = decode_plan(&plan, |j, kind| channel_of.get(j).map_or(0, |c| c[kind]));
+            (Vec::new(), Vec::new(), decode)
+        } else {
+            let (blocks, vectors) = gather_plan(&plan, &gather);
+            (blocks, vectors, Vec::new())
+        };
         ClipBinding {
-            channels,
-            channel_starts,
+            decode,
             joint_of_track,
             unmatched,
             driven,
@@ -990,20 +996,30 @@ impl ClipBinding {
                     .then(|| (src, (pos * block_floats + within) as u32))
             })
             .collect();
-        let (blocks, vectors) = gather_plan(&plan, &gather);
-        // The channels this binding still reads: those of the kept moves.
-        let channels = self
-            .channels
-            .iter()
-            .copied()
-            .filter(|&c| {
-                let (lo, hi) = (self.channel_start(c), self.channel_start(c + 1));
-                gather.iter().any(|&(src, _)| src >= lo && src < hi)
-            })
-            .collect();
+        let (blocks, vectors, decode) = if self.decode.is_empty() {
+            let (blocks, vectors) = gather_plan(&plan, &gather);
+            (blocks, vectors, Vec::new())
+        } else {
+            // The same channels, in the kept lanes of the kept blocks.
+            let mut channel_of = vec![[0u32; 3]; self.skeleton_len];
+            for d in &self.decode {
+                let (p, c) = (
+                    d.first as usize / soa::COMPONENTS,
+                    d.first as usize % soa::COMPONENTS,
+                );
+                let kind = usize::from(c >= soa::R) + usize::from(c >= soa::S);
+                let Some(pb) = self.plan.get(p) else { continue };
+                for (l, &ch) in d.channel.iter().enumerate() {
+                    if let Some(slot) = channel_of.get_mut(pb.block * 4 + l) {
+                        slot[kind] = ch;
+                    }
+                }
+            }
+            let decode = decode_plan(&plan, |j, kind| channel_of.get(j).map_or(0, |c| c[kind]));
+            (Vec::new(), Vec::new(), decode)
+        };
         ClipBinding {
-            channels,
-            channel_starts: self.channel_starts.clone(),
+            decode,
             joint_of_track: self.joint_of_track.clone(),
             unmatched: self.unmatched.clone(),
             driven: self
@@ -1020,14 +1036,6 @@ impl ClipBinding {
             gather,
             id: Identity::new(),
         }
-    }
-
-    /// Where channel `c` starts in a decoded key (for a compressed clip).
-    fn channel_start(&self, c: u32) -> u32 {
-        self.channel_starts
-            .get(c as usize)
-            .copied()
-            .unwrap_or(u32::MAX)
     }
 
     /// The clip's track names that matched no joint.
@@ -1084,8 +1092,10 @@ struct KeyCache {
     keys: [usize; 2],
     /// Two slots of `plan.len() * COMPONENTS` vectors: fixed values, animated lanes from the key.
     slots: Vec<glam::Vec4>,
-    /// A compressed key decoded in its frame layout, before it is gathered into a slot.
-    decoded: Vec<f32>,
+    /// For a compressed clip: the segment whose decode tables `tables` holds (`usize::MAX` = none),
+    /// and one table per [`DecodeBlock`] of the binding. Made when the cursor enters a segment.
+    table_segment: usize,
+    tables: Vec<LaneTable>,
 }
 
 impl KeyCache {
@@ -1103,6 +1113,7 @@ impl KeyCache {
         if self.owner != owner || self.slots.len() != 2 * len {
             self.owner = owner;
             self.keys = [usize::MAX; 2];
+            self.table_segment = usize::MAX;
             self.slots.clear();
             for _ in 0..2 {
                 for pb in &binding.plan {
@@ -1139,9 +1150,22 @@ impl KeyCache {
                     .unwrap_or_default()
             }
             Some(q) => {
-                self.decoded.resize(q.decoded_stride + FRAME_PAD, 0.0);
-                q.decode_into(k, &binding.channels, &mut self.decoded);
-                &self.decoded
+                // Decoded four lanes at a time straight into the slot.
+                let Some((segment, bit)) = q.key_start(k) else {
+                    return;
+                };
+                if self.table_segment != segment {
+                    self.tables.clear();
+                    self.tables.extend(
+                        binding
+                            .decode
+                            .iter()
+                            .map(|d| q.lane_table(segment, d.channel, d.lanes)),
+                    );
+                    self.table_segment = segment;
+                }
+                decode_key(q, bit, &binding.decode, &self.tables, &mut self.slots, base);
+                return;
             }
         };
         // Whole vectors are built in registers and stored once (scalar stores into a vector that is
@@ -1187,6 +1211,66 @@ impl KeyCache {
                     glam::Vec4::select(soa::lanes(g.lanes), v, *slot)
                 };
             }
+        }
+    }
+}
+
+crate::cpu::dispatch_avx2! {
+    /// Decodes the compressed key record starting at `bit` into the key slot starting at vector
+    /// `base`: each [`DecodeBlock`] with its table, four lanes at a time.
+    fn decode_key(
+        q: &Quantized,
+        bit: usize,
+        decode: &[DecodeBlock],
+        tables: &[LaneTable],
+        slots: &mut [glam::Vec4],
+        base: usize,
+    ) -> () => decode_key_portable, decode_key_avx2;
+}
+
+#[inline(always)]
+fn decode_key_portable(
+    q: &Quantized,
+    bit: usize,
+    decode: &[DecodeBlock],
+    tables: &[LaneTable],
+    slots: &mut [glam::Vec4],
+    base: usize,
+) {
+    for (d, table) in decode.iter().zip(tables) {
+        store_lanes(d, q.decode_lanes(bit, table, d.rotation), slots, base);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn decode_key_avx2(
+    q: &Quantized,
+    bit: usize,
+    decode: &[DecodeBlock],
+    tables: &[LaneTable],
+    slots: &mut [glam::Vec4],
+    base: usize,
+) {
+    for (d, table) in decode.iter().zip(tables) {
+        let values = if table.one_load {
+            q.decode_lanes_avx2(bit, table, d.rotation)
+        } else {
+            q.decode_lanes(bit, table, d.rotation)
+        };
+        store_lanes(d, values, slots, base);
+    }
+}
+
+/// Stores a [`DecodeBlock`]'s decoded values in its animated lanes of the slot at vector `base`.
+#[inline(always)]
+fn store_lanes(d: &DecodeBlock, values: [glam::Vec4; 4], slots: &mut [glam::Vec4], base: usize) {
+    let first = base + d.first as usize;
+    let n = if d.rotation { 4 } else { 3 };
+    if let Some(dst) = slots.get_mut(first..first + n) {
+        let keep = soa::lanes(d.lanes);
+        for (o, v) in dst.iter_mut().zip(values) {
+            *o = glam::Vec4::select(keep, v, *o);
         }
     }
 }
@@ -1877,6 +1961,69 @@ mod tests {
     }
 
     #[test]
+    fn compressed_keys_decode_to_the_same_bits_four_lanes_at_a_time_on_every_instruction_set() {
+        // Ten joints in a chain (blocks of four: full, full, half), nine of them driven; one without
+        // an animated rotation and two with scale, so blocks have full, partial and mixed lanes.
+        let joints = (0..10)
+            .map(|i| JointDesc {
+                name: format!("j{i}"),
+                parent: (i > 0).then(|| format!("j{}", i - 1)),
+                bind_local: Transform::from_translation(Vec3::new(0.0, 1.0, i as f32 * 0.1)),
+                inverse_bind: None,
+            })
+            .collect();
+        let sk = Skeleton::from_unordered(joints).unwrap().0;
+        let mut next = 0u32;
+        let mut take = || {
+            next += 3;
+            next - 3
+        };
+        let tracks: Vec<Track> = (0..9)
+            .map(|i| Track {
+                joint: format!("j{i}"),
+                translation: Channel::Animated(take()),
+                rotation: if i == 5 {
+                    Channel::Bind
+                } else {
+                    Channel::Animated(take())
+                },
+                scale: if i == 2 || i == 7 {
+                    Channel::Animated(take())
+                } else {
+                    Channel::Bind
+                },
+            })
+            .collect();
+        // Narrow widths (one 8-byte read per lane) and, in some segments, channels too wide for one.
+        let mut one_load_seen = [false; 2];
+        for widths in [&[0u8, 3, 7, 12, 16, 1][..], &[24, 5, 23, 24, 9, 24, 2][..]] {
+            let clip = compressed_with(tracks.clone(), true, false, widths);
+            let b = ClipBinding::new(&clip, &sk);
+            assert_eq!(
+                b.decode.iter().map(|d| d.lanes.count_ones()).sum::<u32>(),
+                9 + 8 + 2
+            );
+            let (mut fast, mut portable) = (Sampler::new(), Sampler::new());
+            for i in 0..90 {
+                let t = i as f32 / 60.0;
+                let marker = Transform::from_translation(Vec3::splat(9.0));
+                let mut want = vec![marker; sk.len()];
+                reference(&clip, &b, &sk, t, &mut want);
+                let mut got = vec![marker; sk.len()];
+                fast.sample(&clip, &b, &sk, t, &mut got).unwrap();
+                assert_eq!(bits(&got), bits(&want), "{t}");
+                let mut got = vec![marker; sk.len()];
+                crate::cpu::baseline(|| portable.sample(&clip, &b, &sk, t, &mut got)).unwrap();
+                assert_eq!(bits(&got), bits(&want), "portable {t}");
+                for table in &fast.cache.tables {
+                    one_load_seen[usize::from(table.one_load)] = true;
+                }
+            }
+        }
+        assert_eq!(one_load_seen, [true, true]);
+    }
+
+    #[test]
     fn a_restricted_binding_decodes_only_its_channels_and_samples_the_same_values() {
         let sk = skeleton();
         for c in [
@@ -1887,7 +2034,10 @@ mod tests {
             let full = ClipBinding::new(&c, &sk);
             for keep in [0u16, 1] {
                 let part = full.restricted(|j| j == keep);
-                assert!(part.channels.len() < full.channels.len());
+                let lanes = |b: &ClipBinding| -> u32 {
+                    b.decode.iter().map(|d| d.lanes.count_ones()).sum()
+                };
+                assert!(lanes(&part) < lanes(&full));
                 let (mut a, mut b) = (Sampler::new(), Sampler::new());
                 for i in 0..40 {
                     let t = i as f32 * 0.037;

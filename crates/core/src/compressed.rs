@@ -15,7 +15,7 @@
 //! See docs/format.md for the byte layout.
 
 use crate::clip::ClipError;
-use glam::Quat;
+use glam::{Quat, Vec4};
 
 /// Largest bit width a component may use.
 pub const MAX_BITS: u8 = 24;
@@ -74,8 +74,8 @@ pub(crate) struct Quantized {
     seg: Vec<(usize, usize)>,
     /// Per segment, per component.
     dec: Vec<Dec>,
-    /// Per segment, per channel (group of three components): everything decoding it needs, side by
-    /// side, so that [`Quantized::decode_into`] streams through one array.
+    /// Per segment, per channel (group of three components): everything decoding it needs (what
+    /// [`Quantized::lane_table`] gathers).
     channels: Vec<ChannelDec>,
     /// `parts.data` followed by 8 zero bytes, so that every read is one unaligned 8-byte load.
     padded: Vec<u8>,
@@ -88,17 +88,28 @@ struct ChannelDec {
     off: [u32; 3],
     /// Masks of their bit widths.
     mask: [u32; 3],
-    /// Their bit widths.
-    bits: [u8; 3],
     scale: [f32; 3],
     bias: [f32; 3],
-    /// Where the channel's values start in a decoded key.
-    dest: u32,
     /// True for a rotation (its 2-bit index sits right before its first component).
     rotation: bool,
     /// The channel's bits (index and components, which are contiguous) fit one 8-byte load from
     /// any bit position (at most 57 bits).
     one_load: bool,
+}
+
+/// How four channels of one kind decode in one segment, lane by lane ([`Quantized::lane_table`]): a
+/// sampler builds these when it enters a segment and decodes each key of it four joints at a time.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct LaneTable {
+    scale: [Vec4; 3],
+    bias: [Vec4; 3],
+    /// Per lane: bit offset inside a key record of the channel's first field (a rotation's index).
+    at: [u32; 4],
+    /// Per component, per lane: its bit offset from `at`, and the mask of its bit width.
+    shift: [[u32; 4]; 3],
+    mask: [[u32; 4]; 3],
+    /// Every lane's fields fit one 8-byte load from `at`.
+    pub(crate) one_load: bool,
 }
 
 impl PartialEq for Quantized {
@@ -324,10 +335,8 @@ impl Quantized {
                 ChannelDec {
                     off: [d[0].off, d[1].off, d[2].off],
                     mask: [d[0].mask, d[1].mask, d[2].mask],
-                    bits,
                     scale: [d[0].scale, d[1].scale, d[2].scale],
                     bias: [d[0].bias, d[1].bias, d[2].bias],
-                    dest: group_dest.get(g).copied().unwrap_or(0),
                     rotation,
                     one_load: run <= 57
                         && d[1].off == d[0].off + u32::from(bits[0])
@@ -366,68 +375,161 @@ impl Quantized {
         }
     }
 
-    /// Decodes the channels `only` (channel numbers: component / 3) of key `k` into `out` (at least
-    /// [`Quantized::decoded_stride`] floats, each channel at its place in the decoded layout): per
-    /// channel, the values [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give, bit for bit. A sampler
-    /// decodes only the channels its binding reads (a masked layer, a partial skeleton).
-    pub(crate) fn decode_into(&self, k: usize, only: &[u32], out: &mut [f32]) {
-        let groups = self.components / 3;
+    /// Key `k`'s segment and the first bit of its record, or `None` past the last key.
+    #[inline]
+    pub(crate) fn key_start(&self, k: usize) -> Option<(usize, usize)> {
         let seg_len = (self.parts.segment_len as usize).max(1);
         let s = k / seg_len;
-        let (Some(&(start, record)), Some(channels)) = (
-            self.seg.get(s),
-            self.channels.get(s * groups..(s + 1) * groups),
-        ) else {
-            return;
+        let &(start, record) = self.seg.get(s)?;
+        Some((s, start + (k - s * seg_len) * record))
+    }
+
+    /// The decode table of four channels of one kind (all rotations, or all translations or scales)
+    /// in segment `s`, channel `channel[l]` in lane `l` for the lanes set in `lanes`; the other lanes
+    /// decode to zeros.
+    pub(crate) fn lane_table(&self, s: usize, channel: [u32; 4], lanes: u8) -> LaneTable {
+        let groups = self.components / 3;
+        let channels = self
+            .channels
+            .get(s * groups..(s + 1) * groups)
+            .unwrap_or_default();
+        let mut t = LaneTable {
+            one_load: true,
+            ..LaneTable::default()
         };
-        let base = start + (k - s * seg_len) * record;
+        let (mut scale, mut bias) = ([[0.0f32; 4]; 3], [[0.0f32; 4]; 3]);
+        for l in 0..4 {
+            let Some(ch) = channels
+                .get(channel[l] as usize)
+                .filter(|_| lanes & (1 << l) != 0)
+            else {
+                continue;
+            };
+            // A rotation's fields start with its 2-bit index.
+            let first = ch.off[0] - if ch.rotation { ROTATION_INDEX_BITS } else { 0 };
+            t.at[l] = first;
+            for c in 0..3 {
+                t.shift[c][l] = ch.off[c] - first;
+                t.mask[c][l] = ch.mask[c];
+                scale[c][l] = ch.scale[c];
+                bias[c][l] = ch.bias[c];
+            }
+            t.one_load &= ch.one_load;
+        }
+        t.scale = scale.map(Vec4::from_array);
+        t.bias = bias.map(Vec4::from_array);
+        t
+    }
+
+    /// Decodes four channels of the key record starting at bit `base` with `table` (see
+    /// [`Quantized::lane_table`]): one vector per component, lane `l` holding channel `l`'s value. For
+    /// rotations the four vectors are x y z w as [`raw_from_smallest_three`] builds them; otherwise
+    /// the fourth is zero. Each lane's values are those [`KeyRef::vec3`] and [`KeyRef::quat_raw`] give,
+    /// bit for bit: the same operations, four lanes at a time.
+    #[inline(always)]
+    pub(crate) fn decode_lanes(&self, base: usize, table: &LaneTable, rotation: bool) -> [Vec4; 4] {
         let data = &self.padded[..];
         // Every field lies inside the data (checked when the payload was read), which is followed by
         // 8 zero bytes, so one 8-byte load from a field's first byte holds 57 bits or more of it.
+        // Bit positions stay far below 2^61, so `byte + 8` cannot overflow and the bounds check is
+        // one comparison.
         let read = |bit: usize| -> u64 {
-            data.get(bit >> 3..)
-                .and_then(<[u8]>::first_chunk::<8>)
-                .map_or(0, |b| u64::from_le_bytes(*b))
-                >> (bit & 7)
+            let byte = bit >> 3;
+            match data.get(byte..byte + 8) {
+                Some(b) => u64::from_le_bytes(b.try_into().unwrap_or_default()) >> (bit & 7),
+                None => 0,
+            }
         };
-        for ch in only.iter().filter_map(|&c| channels.get(c as usize)) {
-            let (index, q) = if ch.one_load {
-                // Index (for a rotation) and the three components, in one load.
-                let first = base + ch.off[0] as usize;
-                let at = if ch.rotation { first - 2 } else { first };
-                let mut word = read(at);
-                let index = if ch.rotation {
-                    let i = (word & 3) as u32;
-                    word >>= 2;
-                    i
-                } else {
-                    0
-                };
-                let q0 = word as u32 & ch.mask[0];
-                word >>= ch.bits[0];
-                let q1 = word as u32 & ch.mask[1];
-                word >>= ch.bits[1];
-                (index, [q0, q1, word as u32 & ch.mask[2]])
-            } else {
-                let index = if ch.rotation {
-                    (read((base + ch.off[0] as usize).saturating_sub(2)) & 3) as u32
-                } else {
-                    0
-                };
-                let q = [0, 1, 2].map(|i| read(base + ch.off[i] as usize) as u32 & ch.mask[i]);
-                (index, q)
-            };
-            let v = [0, 1, 2].map(|i| ch.bias[i] + ch.scale[i] * q[i] as f32);
-            let dest = ch.dest as usize;
-            if ch.rotation {
-                let q = raw_from_smallest_three(index, v);
-                if let Some(o) = out.get_mut(dest..dest + 4) {
-                    o.copy_from_slice(&q.to_array());
+        let t = table;
+        let mut q = [[0i32; 4]; 3];
+        let mut index = [0i32; 4];
+        if t.one_load {
+            for l in 0..4 {
+                let word = read(base + t.at[l] as usize);
+                index[l] = (word & 3) as i32;
+                for (c, q) in q.iter_mut().enumerate() {
+                    q[l] = ((word >> t.shift[c][l]) as u32 & t.mask[c][l]) as i32;
                 }
-            } else if let Some(o) = out.get_mut(dest..dest + 3) {
-                o.copy_from_slice(&v);
+            }
+        } else {
+            for l in 0..4 {
+                let at = base + t.at[l] as usize;
+                index[l] = (read(at) & 3) as i32;
+                for (c, q) in q.iter_mut().enumerate() {
+                    q[l] = (read(at + t.shift[c][l] as usize) as u32 & t.mask[c][l]) as i32;
+                }
             }
         }
+        // Below 2^24, so the conversion is exact (as the scalar decoder's `u32 as f32`).
+        finish_lanes(
+            t,
+            q.map(|q| Vec4::from_array(q.map(|x| x as f32))),
+            Vec4::from_array(index.map(|i| i as f32)),
+            rotation,
+        )
+    }
+
+    /// [`Quantized::decode_lanes`] with AVX2, for a table whose lanes each read one 8-byte word
+    /// ([`LaneTable::one_load`]): the four lanes' fields are shifted and masked in one 256-bit register
+    /// (64 bits per lane) instead of one scalar shift and mask per lane and field. The integers are the
+    /// same, and the float operations are [`finish_lanes`]', so are the results.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(crate) fn decode_lanes_avx2(
+        &self,
+        base: usize,
+        table: &LaneTable,
+        rotation: bool,
+    ) -> [Vec4; 4] {
+        use std::arch::x86_64::*;
+        let t = table;
+        let data = &self.padded[..];
+        // The 8 bytes from each lane's first field's byte (see `decode_lanes` for the bounds).
+        let word = |l: usize| -> i64 {
+            let byte = (base + t.at[l] as usize) >> 3;
+            match data.get(byte..byte + 8) {
+                Some(b) => i64::from_le_bytes(b.try_into().unwrap_or_default()),
+                None => 0,
+            }
+        };
+        // Four u32 lanes widened to 64 bits.
+        macro_rules! v4 {
+            ($a:expr) => {{
+                let a: &[u32; 4] = $a;
+                _mm256_cvtepu32_epi64(_mm_setr_epi32(
+                    a[0] as i32,
+                    a[1] as i32,
+                    a[2] as i32,
+                    a[3] as i32,
+                ))
+            }};
+        }
+        let words = _mm256_set_epi64x(word(3), word(2), word(1), word(0));
+        // Each lane's bit position inside its first byte.
+        let phase = _mm256_and_si256(
+            _mm256_add_epi64(_mm256_set1_epi64x(base as i64), v4!(&t.at)),
+            _mm256_set1_epi64x(7),
+        );
+        let low_halves = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+        // A macro, not a closure: closures are not inlined into this function here.
+        macro_rules! field {
+            ($shift:expr, $mask:expr) => {{
+                let v = _mm256_and_si256(
+                    _mm256_srlv_epi64(words, _mm256_add_epi64(phase, $shift)),
+                    $mask,
+                );
+                let low = _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(v, low_halves));
+                Vec4::from(_mm_cvtepi32_ps(low))
+            }};
+        }
+        let index = field!(_mm256_setzero_si256(), _mm256_set1_epi64x(3));
+        let q = [
+            field!(v4!(&t.shift[0]), v4!(&t.mask[0])),
+            field!(v4!(&t.shift[1]), v4!(&t.mask[1])),
+            field!(v4!(&t.shift[2]), v4!(&t.mask[2])),
+        ];
+        finish_lanes(t, q, index, rotation)
     }
 
     /// Per component: the smallest and largest bit width over all segments.
@@ -446,6 +548,31 @@ impl Quantized {
         }
         (lo.min(hi), hi)
     }
+}
+
+/// The float half of [`Quantized::decode_lanes`]: values `bias + scale * q` per component, and for a
+/// rotation the dropped component `w = sqrt(max(0, 1 - x^2 - y^2 - z^2))` put back in the place the
+/// index names, the operations and order of [`raw_from_smallest_three`] in every lane.
+#[inline(always)]
+fn finish_lanes(t: &LaneTable, q: [Vec4; 3], index: Vec4, rotation: bool) -> [Vec4; 4] {
+    // Written out: array `map` is not inlined into the AVX2 caller.
+    let v0 = t.bias[0] + t.scale[0] * q[0];
+    let v1 = t.bias[1] + t.scale[1] * q[1];
+    let v2 = t.bias[2] + t.scale[2] * q[2];
+    if !rotation {
+        return [v0, v1, v2, Vec4::ZERO];
+    }
+    let w = (Vec4::ONE - v0 * v0 - v1 * v1 - v2 * v2).max(Vec4::ZERO);
+    let w = Vec4::new(w.x.sqrt(), w.y.sqrt(), w.z.sqrt(), w.w.sqrt());
+    // The index names the dropped component; the other three follow in order.
+    let is = |i: f32| index.cmpeq(Vec4::splat(i));
+    let (i0, i1, i2, i3) = (is(0.0), is(1.0), is(2.0), is(3.0));
+    [
+        Vec4::select(i0, w, v0),
+        Vec4::select(i0, v0, Vec4::select(i1, w, v1)),
+        Vec4::select(i2, w, Vec4::select(i3, v2, v1)),
+        Vec4::select(i3, w, v2),
+    ]
 }
 
 /// One key's record, ready to decode components from.

@@ -104,10 +104,13 @@ fn sampling(c: &mut Criterion) {
         c
     });
     let mut g = c.benchmark_group("clip_sampling");
-    for (label, clips) in [
-        ("plain_two_clips_40_joints", &plain),
-        ("compressed_two_clips_40_joints", &compressed),
+    // The last row runs the portable decode (no AVX2), as on a CPU without it.
+    for (label, clips, baseline_only) in [
+        ("plain_two_clips_40_joints", &plain, false),
+        ("compressed_two_clips_40_joints", &compressed, false),
+        ("compressed_two_clips_40_joints_baseline", &compressed, true),
     ] {
+        sinew_core::set_baseline_only(baseline_only);
         let bindings = clips.clone().map(|c| ClipBinding::new(&c, &s));
         let mut samplers = [Sampler::new(), Sampler::new()];
         let mut out = vec![Transform::IDENTITY; s.len()];
@@ -123,6 +126,7 @@ fn sampling(c: &mut Criterion) {
                 black_box(&out);
             })
         });
+        sinew_core::set_baseline_only(false);
     }
     // The core benchmark's frame on this rig: the two clips in an animator, one on the spine and
     // arms, the other on the legs (complementary masks), then local-to-model and the palette.

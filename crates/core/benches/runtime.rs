@@ -20,7 +20,7 @@ use std::hint::black_box;
 use std::sync::Arc;
 
 mod rig;
-use rig::{biped, clip, upper_body_mask, Rng};
+use rig::{biped, clip, skin_input, upper_body_mask, SkinInput};
 
 fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     let skeleton = Arc::new(biped());
@@ -154,20 +154,12 @@ fn skinning<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
     local_to_model(skeleton.parents(), &locals, &mut models).unwrap();
     skinning_palette(&models, skeleton.inverse_bind(), &mut palette).unwrap();
 
-    let mut rng = Rng(0x1234_5678);
-    let mut positions = Vec::with_capacity(VERTICES);
-    let mut normals = Vec::with_capacity(VERTICES);
-    let mut joints = Vec::with_capacity(VERTICES);
-    let mut weights = Vec::with_capacity(VERTICES);
-    for _ in 0..VERTICES {
-        positions.push(Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 100.0 - 50.0);
-        normals.push((Vec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5).normalize_or(Vec3::Y));
-        let base = (rng.next() % n as u32) as u16;
-        joints.push([0, 1, 2, 3].map(|k| ((base as usize + k) % n) as u16));
-        let w = [rng.unit() + 0.1, rng.unit(), rng.unit(), rng.unit()];
-        let s: f32 = w.iter().sum();
-        weights.push(w.map(|x| x / s));
-    }
+    let SkinInput {
+        positions,
+        normals,
+        joints,
+        weights,
+    } = skin_input(n, VERTICES);
     let mut out_p = vec![Vec3::ZERO; VERTICES];
     let mut out_n = vec![Vec3::ZERO; VERTICES];
 

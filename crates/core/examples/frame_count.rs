@@ -48,21 +48,13 @@ fn main() {
     anim.evaluate(&mut locals).unwrap();
 
     // 10 000 vertices for the skinning step.
-    let mut rng = rig::Rng(0x1234_5678);
     let vertices = 10_000;
-    let mut positions = Vec::with_capacity(vertices);
-    let mut normals = Vec::with_capacity(vertices);
-    let mut joints = Vec::with_capacity(vertices);
-    let mut weights = Vec::with_capacity(vertices);
-    for _ in 0..vertices {
-        positions.push(Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 100.0 - 50.0);
-        normals.push((Vec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5).normalize_or(Vec3::Y));
-        let base = (rng.next() % n as u32) as u16;
-        joints.push([0, 1, 2, 3].map(|k| ((base as usize + k) % n) as u16));
-        let w = [rng.unit() + 0.1, rng.unit(), rng.unit(), rng.unit()];
-        let s: f32 = w.iter().sum();
-        weights.push(w.map(|x| x / s));
-    }
+    let rig::SkinInput {
+        positions,
+        normals,
+        joints,
+        weights,
+    } = rig::skin_input(n, vertices);
     let mut out_p = vec![Vec3::ZERO; vertices];
     let mut out_n = vec![Vec3::ZERO; vertices];
     local_to_model_and_palette(

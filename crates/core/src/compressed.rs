@@ -141,6 +141,15 @@ pub fn smallest_three(q: Quat) -> (u8, [f32; 3]) {
             big = i;
         }
     }
+    (big as u8, three_without(q, big as u8))
+}
+
+/// The three components of `q` other than component `index` (0-3), in order, sign-flipped so that
+/// component `index` is positive: what [`from_smallest_three`] rebuilds `q` from with that index,
+/// whether or not that component is the largest.
+pub fn three_without(q: Quat, index: u8) -> [f32; 3] {
+    let a = q.to_array();
+    let big = usize::from(index & 3);
     let sign = if a[big] < 0.0 { -1.0 } else { 1.0 };
     let mut out = [0.0; 3];
     let mut k = 0;
@@ -150,7 +159,7 @@ pub fn smallest_three(q: Quat) -> (u8, [f32; 3]) {
             k += 1;
         }
     }
-    (big as u8, out)
+    out
 }
 
 /// Rebuilds a unit quaternion from [`smallest_three`]'s output.

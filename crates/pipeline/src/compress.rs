@@ -43,7 +43,7 @@
 
 use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::compressed::{
-    dequant_params, pack, smallest_three, QuantizedParts, SegmentComponent, MAX_BITS,
+    dequant_params, pack, smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
 };
 use sinew_core::format::clip_record_size;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -326,32 +326,37 @@ pub fn measure(
 }
 
 fn max_error_of(src: &[Vec<[Vec3; 3]>], rig: &Rig, clip: &Clip, times: &[f32], limit: f32) -> f32 {
-    let binding = ClipBinding::new(clip, &rig.skeleton);
-    let mut sampler = Sampler::new();
-    let defaults: Vec<Transform> = if clip.additive() {
-        vec![Transform::IDENTITY; rig.skeleton.len()]
-    } else {
-        rig.skeleton.bind_local().to_vec()
-    };
-    let mut pose = defaults.clone();
-    let (mut m, mut pts) = (Vec::new(), Vec::new());
     let mut worst = 0.0f32;
-    for (k, &t) in times.iter().enumerate() {
-        pose.copy_from_slice(&defaults);
-        let _ = sampler.sample(clip, &binding, &rig.skeleton, t, &mut pose);
-        rig.points_of(&pose, &mut m, &mut pts);
-        for e in point_error(&src[k], &pts) {
+    runtime_points(rig, clip, times, |k, pts| {
+        for e in point_error(&src[k], pts) {
             worst = worst.max(e);
         }
-        if worst > limit {
-            return worst;
-        }
-    }
+        worst > limit
+    });
     worst
 }
 
 /// True when `clip`, sampled by the runtime at `times`, keeps every joint's error within its limit.
 fn within(src: &[Vec<[Vec3; 3]>], rig: &Rig, clip: &Clip, times: &[f32], limits: &[f32]) -> bool {
+    let mut ok = true;
+    runtime_points(rig, clip, times, |k, pts| {
+        ok = !point_error(&src[k], pts)
+            .zip(limits)
+            .any(|(e, &l)| exceeds(e, l));
+        !ok
+    });
+    ok
+}
+
+/// Samples `clip` with the runtime's sampler at each of `times` (over the bind pose, or the identity
+/// for an additive clip) and calls `stop` with the time's index and the rig's model-space points,
+/// until `stop` returns true.
+fn runtime_points(
+    rig: &Rig,
+    clip: &Clip,
+    times: &[f32],
+    mut stop: impl FnMut(usize, &[[Vec3; 3]]) -> bool,
+) {
     let binding = ClipBinding::new(clip, &rig.skeleton);
     let mut sampler = Sampler::new();
     let defaults: Vec<Transform> = if clip.additive() {
@@ -365,14 +370,10 @@ fn within(src: &[Vec<[Vec3; 3]>], rig: &Rig, clip: &Clip, times: &[f32], limits:
         pose.copy_from_slice(&defaults);
         let _ = sampler.sample(clip, &binding, &rig.skeleton, t, &mut pose);
         rig.points_of(&pose, &mut m, &mut pts);
-        if point_error(&src[k], &pts)
-            .zip(limits)
-            .any(|(e, &l)| exceeds(e, l))
-        {
-            return false;
+        if stop(k, &pts) {
+            return;
         }
     }
-    true
 }
 
 /// True when `error` is above `limit` or not a number.
@@ -484,19 +485,27 @@ impl Work {
         }
     }
 
-    /// A plain clip with these values.
-    fn plain(&self, like: &Clip) -> Option<Clip> {
+    /// The clip tracks of these values, with animated channels numbered in track order, and the
+    /// number of animated components: a rotation stores `rotation_components` (4 as plain floats, 3
+    /// quantized).
+    fn clip_tracks(&self, rotation_components: u32) -> (Vec<Track>, u32) {
         let mut o = 0;
-        let tracks: Vec<Track> = self
+        let tracks = self
             .tracks
             .iter()
             .map(|t| Track {
                 joint: t.joint.clone(),
                 translation: t.t.channel(&mut o, 3),
-                rotation: t.r.channel(&mut o, 4),
+                rotation: t.r.channel(&mut o, rotation_components),
                 scale: t.s.channel(&mut o, 3),
             })
             .collect();
+        (tracks, o)
+    }
+
+    /// A plain clip with these values.
+    fn plain(&self, like: &Clip) -> Option<Clip> {
+        let (tracks, o) = self.clip_tracks(4);
         let mut frames = Vec::with_capacity(o as usize * self.times.len());
         for k in 0..self.times.len() {
             for t in &self.tracks {
@@ -708,23 +717,6 @@ struct Comp {
     rot: usize,
 }
 
-/// The three components of `q` other than component `index`, sign-flipped so that component `index`
-/// is positive (what the decoder rebuilds with that index).
-fn split_at(q: Quat, index: u8) -> [f32; 3] {
-    let a = q.to_array();
-    let big = usize::from(index & 3);
-    let sign = if a[big] < 0.0 { -1.0 } else { 1.0 };
-    let mut out = [0.0; 3];
-    let mut k = 0;
-    for (i, v) in a.iter().enumerate() {
-        if i != big {
-            out[k] = v * sign;
-            k += 1;
-        }
-    }
-    out
-}
-
 /// Smallest magnitude a dropped quaternion component may have: the largest of four unit components
 /// is at least 0.5, so dropping any component of at least this size rebuilds it no less precisely
 /// than dropping the largest could in the worst case.
@@ -755,7 +747,7 @@ fn split_rotations(v: &[Quat]) -> Vec<(u8, [f32; 3])> {
             if q.to_array()[usize::from(cur)].abs() < MIN_DROPPED {
                 cur = smallest_three(*q).0;
             }
-            out.push((cur, split_at(*q, cur)));
+            out.push((cur, three_without(*q, cur)));
         }
         let c = cost(&out);
         if c < best_cost {
@@ -984,17 +976,7 @@ impl Layout {
             }
         }
         let data = pack(n, self.seg_len, &segments, &self.starts, &q, &idx);
-        let mut o = 0;
-        let tracks: Vec<Track> = work
-            .tracks
-            .iter()
-            .map(|t| Track {
-                joint: t.joint.clone(),
-                translation: t.t.channel(&mut o, 3),
-                rotation: t.r.channel(&mut o, 3),
-                scale: t.s.channel(&mut o, 3),
-            })
-            .collect();
+        let (tracks, _) = work.clip_tracks(3);
         Clip::from_quantized(
             like.name().to_owned(),
             like.duration(),
@@ -1357,7 +1339,7 @@ impl<'a> Eval<'a> {
                         let vals = match self.key_src[k] {
                             Some(i) if self.compensate => {
                                 let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
-                                split_at(target, index)
+                                three_without(target, index)
                             }
                             _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
                         };

@@ -155,6 +155,42 @@ pub fn upper_body_mask(skeleton: &Skeleton) -> Vec<f32> {
 }
 
 /// xorshift32, for repeatable pseudo-random inputs.
+/// The skinning benchmark's vertices: four influences each.
+pub struct SkinInput {
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub joints: Vec<[u16; 4]>,
+    pub weights: Vec<[f32; 4]>,
+}
+
+/// `count` random vertices over `joints` joints, from a fixed seed; weights sum to one and the first
+/// is never zero.
+pub fn skin_input(joints: usize, count: usize) -> SkinInput {
+    let mut rng = Rng(0x1234_5678);
+    let mut input = SkinInput {
+        positions: Vec::with_capacity(count),
+        normals: Vec::with_capacity(count),
+        joints: Vec::with_capacity(count),
+        weights: Vec::with_capacity(count),
+    };
+    for _ in 0..count {
+        input
+            .positions
+            .push(Vec3::new(rng.unit(), rng.unit(), rng.unit()) * 100.0 - 50.0);
+        input
+            .normals
+            .push((Vec3::new(rng.unit(), rng.unit(), rng.unit()) - 0.5).normalize_or(Vec3::Y));
+        let base = (rng.next() % joints as u32) as u16;
+        input
+            .joints
+            .push([0, 1, 2, 3].map(|k| ((base as usize + k) % joints) as u16));
+        let w = [rng.unit() + 0.1, rng.unit(), rng.unit(), rng.unit()];
+        let s: f32 = w.iter().sum();
+        input.weights.push(w.map(|x| x / s));
+    }
+    input
+}
+
 pub struct Rng(pub u32);
 impl Rng {
     pub fn next(&mut self) -> u32 {

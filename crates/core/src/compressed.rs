@@ -14,7 +14,6 @@
 //! `scale = ext / (2^bits - 1)` and `bias = lo` (for `bits == 0`: `scale = 0`, `bias = lo + ext / 2`).
 //! See docs/format.md for the byte layout.
 
-use crate::clip::ClipError;
 use glam::{Quat, Vec4};
 
 /// Largest bit width a component may use.
@@ -251,13 +250,14 @@ pub fn pack(
 }
 
 impl Quantized {
-    /// Validates `parts` for `keys` keys and the given component layout, and builds decode tables.
+    /// Validates `parts` for `keys` keys and the given component layout, and builds decode tables. The
+    /// error is the reason, which the clip reports as `ClipError::BadCompressed`.
     pub(crate) fn new(
         parts: QuantizedParts,
         keys: usize,
         rotation_starts: &[bool],
-    ) -> Result<Quantized, ClipError> {
-        let bad = |m: String| Err(ClipError::BadCompressed(m));
+    ) -> Result<Quantized, String> {
+        let bad = |m: String| Err(m);
         let comps = rotation_starts.len();
         if parts.segment_len == 0 {
             return bad("segment length 0".into());
@@ -617,7 +617,7 @@ impl KeyRef<'_> {
     /// The rotation whose first component is `c`.
     #[inline]
     pub(crate) fn quat(&self, c: usize) -> Quat {
-        crate::clip::normalize_rotation(self.quat_raw(c))
+        crate::rotation::normalize_rotation(self.quat_raw(c))
     }
     /// [`KeyRef::quat`] before normalisation (for callers that normalise after blending).
     #[inline]

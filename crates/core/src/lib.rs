@@ -17,6 +17,7 @@ pub mod blend;
 pub mod clip;
 pub mod compressed;
 mod cpu;
+mod rotation;
 pub use cpu::set_baseline_only;
 pub mod format;
 pub mod mesh;

@@ -67,10 +67,10 @@ pub struct Skeleton {
     by_name: HashMap<String, JointIndex>,
     /// `bind_local` as blocks of four joints (see [`crate::soa`]), for the blend.
     bind_blocks: Vec<glam::Vec4>,
-    /// [`crate::skinning::level_order`] of `parents`.
+    /// [`level_order`] of `parents`.
     level_order: Vec<JointIndex>,
-    /// `inverse_bind` with every entry broadcast (see [`crate::skinning::Splats`]).
-    inverse_bind_splats: Vec<crate::skinning::Splats>,
+    /// `inverse_bind` with every entry broadcast (see [`crate::soa::Splats`]).
+    inverse_bind_splats: Vec<crate::soa::Splats>,
 }
 
 impl Skeleton {
@@ -191,8 +191,8 @@ impl Skeleton {
         }
         Ok(Skeleton {
             bind_blocks: crate::soa::from_transforms(&bind_local),
-            level_order: crate::skinning::level_order(&parents),
-            inverse_bind_splats: inverse_bind.iter().map(crate::skinning::splats).collect(),
+            level_order: level_order(&parents),
+            inverse_bind_splats: inverse_bind.iter().map(crate::soa::splats).collect(),
             names,
             parents,
             bind_local,
@@ -202,11 +202,11 @@ impl Skeleton {
     }
 
     /// The inverse bind matrices with every entry broadcast.
-    pub(crate) fn inverse_bind_splats(&self) -> &[crate::skinning::Splats] {
+    pub(crate) fn inverse_bind_splats(&self) -> &[crate::soa::Splats] {
         &self.inverse_bind_splats
     }
 
-    /// The joints level by level (see [`crate::skinning::level_order`]).
+    /// The joints level by level (see [`level_order`]).
     pub(crate) fn level_order(&self) -> &[JointIndex] {
         &self.level_order
     }
@@ -277,6 +277,20 @@ pub fn inverse_bind_from_locals(parents: &[Option<JointIndex>], locals: &[Transf
         model.push(m);
     }
     model.iter().map(|m| m.inverse()).collect()
+}
+
+/// The joints level by level (roots, then their children, ...), by index within a level: an order in
+/// which every joint comes after its parent and joints that depend on each other are far apart.
+pub(crate) fn level_order(parents: &[Option<JointIndex>]) -> Vec<JointIndex> {
+    let mut depth = vec![0u32; parents.len()];
+    for (i, p) in parents.iter().enumerate() {
+        if let Some(p) = p.map(usize::from).filter(|&p| p < i) {
+            depth[i] = depth[p] + 1;
+        }
+    }
+    let mut order: Vec<JointIndex> = (0..parents.len() as JointIndex).collect();
+    order.sort_by_key(|&j| (depth[j as usize], j));
+    order
 }
 
 #[cfg(test)]

@@ -11,6 +11,7 @@
 
 use crate::cpu::multiversion;
 use crate::skeleton::JointIndex;
+use crate::soa::Splats;
 use crate::{soa, Lod, Transform, MAX_INFLUENCES};
 use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4};
 
@@ -160,21 +161,6 @@ pub(crate) fn local_to_model_and_palette_blocks(
     Ok(())
 }
 
-/// A matrix's upper 3x4 entries, each broadcast to four lanes: entry `3 * c + r` is row `r` of column
-/// `c`. Multiplying by a broadcast kept in memory saves the broadcast instruction of every use.
-pub(crate) type Splats = [Vec4; 12];
-
-/// `m`'s [`Splats`].
-pub(crate) fn splats(m: &Mat4) -> Splats {
-    let mut out = [Vec4::ZERO; 12];
-    for c in 0..4 {
-        for r in 0..3 {
-            out[3 * c + r] = Vec4::splat(m.col(c)[r]);
-        }
-    }
-    out
-}
-
 multiversion! {
     /// [`local_matrices`] of every block of `blocks` into `scratch` (sized by the caller).
     fn fill_local_matrices(blocks: &[Vec4], scratch: &mut [f32]) -> () => fill_local_matrices_generic;
@@ -241,20 +227,6 @@ fn models_and_palette_in_order_generic(
 
 /// Floats of [`local_matrices`] per block of four joints.
 const LOCAL: usize = 48;
-
-/// The joints level by level (roots, then their children, ...), by index within a level: an order in
-/// which every joint comes after its parent and joints that depend on each other are far apart.
-pub(crate) fn level_order(parents: &[Option<JointIndex>]) -> Vec<JointIndex> {
-    let mut depth = vec![0u32; parents.len()];
-    for (i, p) in parents.iter().enumerate() {
-        if let Some(p) = p.map(usize::from).filter(|&p| p < i) {
-            depth[i] = depth[p] + 1;
-        }
-    }
-    let mut order: Vec<JointIndex> = (0..parents.len() as JointIndex).collect();
-    order.sort_by_key(|&j| (depth[j as usize], j));
-    order
-}
 
 fn check_parents(parents: &[Option<JointIndex>]) -> Result<(), SkinError> {
     for (i, p) in parents.iter().enumerate() {
@@ -551,6 +523,7 @@ fn normalize_yzx(r: Vec3A, d: Vec3A) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::skeleton::level_order;
     use glam::Quat;
 
     /// xorshift32 in [-1, 1).

@@ -11,7 +11,7 @@
 //! quaternions are summed as glam sums them: `(x0*x1 + z0*z1) + (y0*y1 + w0*w1)`.
 
 use crate::Transform;
-use glam::{BVec4A, Vec4};
+use glam::{BVec4A, Mat4, Vec4};
 
 /// Vectors per block.
 pub(crate) const COMPONENTS: usize = 10;
@@ -73,7 +73,7 @@ pub(crate) fn normalize_q(q: [Vec4; 4]) -> [Vec4; 4] {
     q.map(|c| c * inv)
 }
 
-pub(crate) use crate::clip::normalize_rotation;
+pub(crate) use crate::rotation::normalize_rotation;
 
 /// `q` negated (multiplied by -1, as glam's `-q`) in the lanes where `d < 0`.
 #[inline(always)]
@@ -373,6 +373,21 @@ pub(crate) fn resolve(accum: &[Vec4], bind: &[Vec4], out: &mut [Vec4]) {
             o[R + i] = select(blended, v, b[R + i]);
         }
     }
+}
+
+/// A matrix's upper 3x4 entries, each broadcast to four lanes: entry `3 * c + r` is row `r` of column
+/// `c`. Multiplying by a broadcast kept in memory saves the broadcast instruction of every use.
+pub(crate) type Splats = [Vec4; 12];
+
+/// `m`'s [`Splats`].
+pub(crate) fn splats(m: &Mat4) -> Splats {
+    let mut out = [Vec4::ZERO; 12];
+    for c in 0..4 {
+        for r in 0..3 {
+            out[3 * c + r] = Vec4::splat(m.col(c)[r]);
+        }
+    }
+    out
 }
 
 #[cfg(test)]

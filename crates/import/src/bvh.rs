@@ -12,6 +12,7 @@
 //! is one line holding exactly as many numbers as the hierarchy declares channels. Every error names
 //! the line.
 
+use crate::text::{clip_name, decode, numbered_lines, parse_finite, truncate};
 use crate::{ImportError, ImportOptions, Resolver};
 use sinew_core::glam::{DQuat, DVec3, Quat, Vec3};
 use sinew_core::{Curve, JointDesc, Skeleton, TrackCurves, Transform};
@@ -45,25 +46,6 @@ fn err(file: &str, section: &str, line: usize, msg: impl Into<String>) -> Import
     ImportError::at_line(file, section, line, msg)
 }
 
-/// Parses one number, rejecting anything that is not a finite decimal.
-fn parse_num(file: &str, section: &str, line: usize, tok: &str) -> Result<f64, ImportError> {
-    match tok.parse::<f64>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(err(
-            file,
-            section,
-            line,
-            format!("non-finite number {tok:?}"),
-        )),
-        Err(_) => Err(err(
-            file,
-            section,
-            line,
-            format!("expected a number, found {tok:?}"),
-        )),
-    }
-}
-
 fn channel_kind(tok: &str) -> Option<ChannelKind> {
     let lower = tok.to_ascii_lowercase();
     Some(match lower.as_str() {
@@ -77,19 +59,6 @@ fn channel_kind(tok: &str) -> Option<ChannelKind> {
     })
 }
 
-/// Decodes the bytes: UTF-8 (optionally with a BOM; invalid sequences replaced) or UTF-16 with a BOM.
-fn decode(bytes: &[u8]) -> String {
-    crate::obj::decode_text(bytes)
-}
-
-/// Splits text into lines numbered from 1, accepting `\n`, `\r\n` and lone `\r`.
-fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    text.split('\n')
-        .flat_map(|l| l.strip_suffix('\r').unwrap_or(l).split('\r'))
-        .enumerate()
-        .map(|(i, l)| (i + 1, l))
-}
-
 /// Imports a BVH file.
 pub fn import(
     file_name: &str,
@@ -98,7 +67,7 @@ pub fn import(
     _options: &ImportOptions,
 ) -> Result<Scene, ImportError> {
     let text = decode(bytes);
-    let mut it = lines(&text);
+    let mut it = numbered_lines(&text);
     let f = file_name;
 
     // HIERARCHY header.
@@ -285,7 +254,7 @@ pub fn import(
                 }
                 let mut v = [0.0f64; 3];
                 for (slot, tok) in v.iter_mut().zip(&toks) {
-                    *slot = parse_num(f, "HIERARCHY", n, tok)?;
+                    *slot = parse_finite(f, "HIERARCHY", n, tok)?;
                 }
                 if let Some(j) = joints.get_mut(cur) {
                     j.offset = DVec3::from_array(v);
@@ -431,7 +400,7 @@ pub fn import(
                 .map(|w| w.to_ascii_lowercase())
                 .eq(["frame", "time"].iter().map(|s| s.to_string())) =>
         {
-            parse_num(f, "MOTION", ft_line, v.trim())?
+            parse_finite(f, "MOTION", ft_line, v.trim())?
         }
         _ => {
             return Err(err(
@@ -497,7 +466,7 @@ pub fn import(
                     format!("frame {k} has more than {total_channels} values"),
                 ));
             }
-            values.push(parse_num(f, "MOTION", *n, tok)?);
+            values.push(parse_finite(f, "MOTION", *n, tok)?);
         }
         let got = values.len() - before;
         if got != total_channels {
@@ -629,29 +598,4 @@ pub fn import(
     scene.skeleton = Some(skeleton);
     scene.diagnostics = diagnostics;
     Ok(scene)
-}
-
-/// The clip name: the file name without directories and extension.
-pub(crate) fn clip_name(file_name: &str) -> String {
-    let base = file_name.rsplit(['/', '\\']).next().unwrap_or(file_name);
-    let stem = match base.rsplit_once('.') {
-        Some((s, _)) if !s.is_empty() => s,
-        _ => base,
-    };
-    if stem.is_empty() {
-        "clip".to_string()
-    } else {
-        stem.to_string()
-    }
-}
-
-/// Shortens text quoted in an error message.
-pub(crate) fn truncate(s: &str) -> String {
-    if s.chars().count() <= 40 {
-        s.to_string()
-    } else {
-        let mut t: String = s.chars().take(40).collect();
-        t.push('…');
-        t
-    }
 }

@@ -15,6 +15,7 @@ pub mod gltf;
 pub mod ms3d;
 pub mod obj;
 pub mod sinew;
+mod text;
 
 pub use error::{ImportError, Location};
 pub use sinew_scene::Scene;

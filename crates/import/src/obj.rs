@@ -15,42 +15,12 @@
 //! spelling and can panic on malformed MTL lines. Materials are read from the MTL files named by
 //! `mtllib`, through the `resolve` callback; a missing MTL file is a warning.
 
+use crate::text::{clip_name, decode, numbered_lines, truncate};
 use crate::{ImportError, ImportOptions, Resolver};
 use sinew_core::glam::{Vec2, Vec3};
 use sinew_core::{Lod, Submesh};
 use sinew_scene::{Diagnostic, Material, Mesh, Scene, SourceFormat};
 use std::collections::HashMap;
-
-/// Decodes text bytes: UTF-16 LE/BE when they start with a byte-order mark, otherwise UTF-8 (a UTF-8
-/// BOM is skipped; invalid sequences become U+FFFD, so stray Latin-1 in comments does not fail a file).
-pub(crate) fn decode_text(bytes: &[u8]) -> String {
-    let utf16 = |be: bool| {
-        let units = bytes.get(2..).unwrap_or(&[]).chunks_exact(2).map(|c| {
-            if be {
-                u16::from_be_bytes([c[0], c[1]])
-            } else {
-                u16::from_le_bytes([c[0], c[1]])
-            }
-        });
-        char::decode_utf16(units)
-            .map(|r| r.unwrap_or(char::REPLACEMENT_CHARACTER))
-            .collect::<String>()
-    };
-    match bytes {
-        [0xFE, 0xFF, ..] => utf16(true),
-        [0xFF, 0xFE, ..] => utf16(false),
-        [0xEF, 0xBB, 0xBF, rest @ ..] => String::from_utf8_lossy(rest).into_owned(),
-        _ => String::from_utf8_lossy(bytes).into_owned(),
-    }
-}
-
-/// Lines numbered from 1; `\n`, `\r\n` and lone `\r` all end a line.
-fn numbered_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    text.split('\n')
-        .flat_map(|l| l.strip_suffix('\r').unwrap_or(l).split('\r'))
-        .enumerate()
-        .map(|(i, l)| (i + 1, l))
-}
 
 /// How a number was read.
 enum Num {
@@ -154,7 +124,7 @@ pub fn import(
             "UTF-16 file with an odd number of bytes",
         ));
     }
-    let text = decode_text(bytes);
+    let text = decode(bytes);
 
     let mut positions: Vec<Vec3> = Vec::new();
     let mut texcoords: Vec<Vec2> = Vec::new();
@@ -162,7 +132,7 @@ pub fn import(
     let mut meshes: Vec<MeshBuild> = Vec::new();
     let mut mesh_by_name: HashMap<String, usize> = HashMap::new();
     let mut current_mesh: Option<usize> = None;
-    let mut current_name = crate::bvh::clip_name(f);
+    let mut current_name = clip_name(f);
     // Material names in first-use order; index 0 is "" (no usemtl).
     let mut material_names: Vec<String> = vec![String::new()];
     let mut material_index: HashMap<String, usize> = HashMap::new();
@@ -202,7 +172,7 @@ pub fn import(
                                 f,
                                 kw,
                                 n,
-                                format!("expected a number, found {:?}", crate::bvh::truncate(tok)),
+                                format!("expected a number, found {:?}", truncate(tok)),
                             ))
                         }
                     };
@@ -211,7 +181,7 @@ pub fn import(
                             f,
                             kw,
                             n,
-                            format!("non-finite number {:?}", crate::bvh::truncate(tok)),
+                            format!("non-finite number {:?}", truncate(tok)),
                         ));
                     }
                     vals[count] = v;
@@ -279,7 +249,7 @@ pub fn import(
                                 f,
                                 "f",
                                 n,
-                                format!("bad index {:?} in face corner", crate::bvh::truncate(p)),
+                                format!("bad index {:?} in face corner", truncate(p)),
                             ));
                         };
                         let count = counts[k] as i64;
@@ -333,10 +303,7 @@ pub fn import(
                             f,
                             "f",
                             n,
-                            format!(
-                                "face corner {:?} has more than 3 indices",
-                                crate::bvh::truncate(tok)
-                            ),
+                            format!("face corner {:?} has more than 3 indices", truncate(tok)),
                         ));
                     }
                     mesh.corners.push(Corner {
@@ -362,11 +329,7 @@ pub fn import(
             "l" => notes.lines += 1,
             "o" | "g" => {
                 let name = rest.split_ascii_whitespace().collect::<Vec<_>>().join(" ");
-                let name = if name.is_empty() {
-                    crate::bvh::clip_name(f)
-                } else {
-                    name
-                };
+                let name = if name.is_empty() { clip_name(f) } else { name };
                 if name != current_name {
                     current_name = name;
                     current_mesh = None;
@@ -386,7 +349,7 @@ pub fn import(
                                 n,
                                 format!(
                                     "smoothing group must be a number or `off`, found {:?}",
-                                    crate::bvh::truncate(rest)
+                                    truncate(rest)
                                 ),
                             ))
                         }
@@ -756,7 +719,7 @@ fn load_mtllib(
 /// Parses MTL text: `newmtl`, `Kd` (base colour), `d`/`Tr` (alpha), `map_Kd` (texture). Malformed lines
 /// are skipped with a warning naming the line.
 fn parse_mtl(name: &str, bytes: &[u8], materials: &mut Vec<Material>, diags: &mut Vec<Diagnostic>) {
-    let text = decode_text(bytes);
+    let text = decode(bytes);
     let mut index: HashMap<String, usize> = materials
         .iter()
         .enumerate()

@@ -1,14 +1,15 @@
 //! The `.sinew` reader. Layout: docs/format.md. Every count is checked against the bytes that remain
 //! before anything is allocated; all arithmetic on values from the file is checked.
 
+use super::asset::{
+    check_lod, check_source_map, Asset, LodInfo, Mask, Material, SectionInfo, SourceVertexMap, Tag,
+    ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING, SECTION_ENTRY_SIZE, SECTION_VERSION,
+    VERSION_MAJOR,
+};
+use super::error::{FormatError, FormatErrorKind as K};
 use super::write::{
     ATTR_NORMALS, ATTR_SKIN, ATTR_UVS, CLIP_ADDITIVE, CLIP_LOOPING, CLIP_QUANTIZED, ENCODING_F32,
     KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, MATERIAL_RECORD, TRACK_RECORD,
-};
-use super::{
-    check_lod, check_source_map, Asset, FormatError, FormatErrorKind as K, LodInfo, Mask, Material,
-    SectionInfo, SourceVertexMap, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
-    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR,
 };
 use crate::clip::{Channel, Track};
 use crate::{Clip, Lod, Mesh, Skeleton, Submesh, Transform};

@@ -1,9 +1,10 @@
 //! The `.sinew` writer. Layout: docs/format.md.
 
-use super::{
-    validate, Asset, FormatError, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
+use super::asset::{
+    validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
     SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPRESSED,
 };
+use super::error::FormatError;
 use crate::clip::Channel;
 use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
@@ -508,7 +509,7 @@ fn source_vertices(asset: &Asset) -> Vec<u8> {
 
 /// MASK: `u32 mask_count; 12 zero bytes;` then per mask, 16-aligned:
 /// `u32 name; u32 weight_count; 8 zero bytes;` then `weight_count x (u32 joint name; f32 weight)`.
-fn masks(list: &[super::Mask], strings: &mut Strings) -> Vec<u8> {
+fn masks(list: &[super::asset::Mask], strings: &mut Strings) -> Vec<u8> {
     let mut b = Buf::default();
     b.u32(list.len() as u32);
     b.zeros(12);

@@ -1,8 +1,8 @@
 //! MS3D keys as Milkshape's viewer evaluates them, resampled into linear scene curves, and the choice
 //! of how position keys compose with the bind pose.
 
+use super::convention::{euler_to_quat, Influences};
 use super::parse::{File, Joint, Key};
-use super::{euler_to_quat, Influences};
 use crate::{ImportError, PositionKeyRule};
 use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{Curve, JointIndex, Skeleton, TrackCurves};

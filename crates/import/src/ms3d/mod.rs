@@ -15,21 +15,19 @@
 //!   measures both readings and reports its choice as an `ms3d-position-keys` diagnostic.
 
 mod anim;
+mod convention;
 pub mod parse;
 
 pub use anim::{PositionKeyFigures, ViewerCurves};
+pub use convention::euler_to_quat;
+use convention::Influences;
 pub use parse::{parse, File};
 
 use crate::{ImportError, ImportOptions, Resolver};
-use sinew_core::glam::{EulerRot, Quat, Vec2, Vec3};
+use sinew_core::glam::{Vec2, Vec3};
 use sinew_core::{JointDesc, JointIndex, Lod, Skeleton, Submesh, Transform};
 use sinew_scene::{Diagnostic, Material, Mesh, Scene, SourceFormat};
 use std::collections::HashMap;
-
-/// The rotation of Milkshape Euler angles (x, y, z): `Rz * Ry * Rx` acting on column vectors.
-pub fn euler_to_quat(angles: [f32; 3]) -> Quat {
-    Quat::from_euler(EulerRot::ZYX, angles[2], angles[1], angles[0])
-}
 
 /// Imports an MS3D file into a [`Scene`].
 pub fn import(
@@ -148,9 +146,6 @@ fn build_skeleton(
     })?;
     Ok((Some(skeleton), new_index))
 }
-
-/// Up to four (skeleton joint, weight) pairs per file vertex, weights summing to 1.
-pub(crate) type Influences = ([u16; 4], [f32; 4]);
 
 fn vertex_influences(
     file: &File,

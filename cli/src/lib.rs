@@ -14,6 +14,7 @@ pub mod cli;
 pub mod commands;
 pub mod input;
 pub mod output;
+pub mod report;
 pub mod steps;
 
 use clap::Parser;

@@ -3,9 +3,11 @@
 //! the JSON report. Field names of the report structs are a stable interface (docs/cli.md).
 
 use crate::cli::{CompressArgs, LodArgs, SplitOpts};
-use crate::commands::inspect::{diag_report, DiagnosticReport};
+use crate::report::{
+    diag_report, EntryReport, MappingReport, MotionReport, PartReport, RestDifferenceReport,
+    SplitReport,
+};
 use anyhow::{anyhow, bail, Context};
-use serde::Serialize;
 use sinew_core::Skeleton;
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
@@ -14,46 +16,6 @@ use sinew_pipeline::retarget::{self, REST_DIFFERENCE_WARN_DEGREES};
 use sinew_pipeline::split::{self, MaskSpec};
 use sinew_scene::{Diagnostic, Scene, SceneClip, SourceFormat};
 use std::path::Path;
-
-/// One rig joint of a mapping report.
-#[derive(Debug, Clone, Serialize)]
-pub struct EntryReport {
-    /// Rig joint name.
-    pub rig: String,
-    /// Motion joint bound to it, `null` when unmatched.
-    pub motion: Option<String>,
-    /// `exact`, `normalised`, `synonym`, `fuzzy`, `file`, or `null` when unmatched.
-    pub method: Option<&'static str>,
-    /// For `synonym`: the slot both joints fall in.
-    pub slot: Option<String>,
-    /// For `fuzzy`: the similarity score (0.75 to 1).
-    pub score: Option<f32>,
-    /// The rig joint's side: `centre`, `left` or `right`.
-    pub side: &'static str,
-}
-
-/// How a motion's joints bind to a rig's joints.
-#[derive(Debug, Clone, Serialize)]
-pub struct MappingReport {
-    /// Rig label (file name).
-    pub rig: String,
-    /// Motion label (file name).
-    pub motion: String,
-    /// Name family detected for the rig: `biped`, `cmu`, `mixamo`, `other`.
-    pub rig_family: &'static str,
-    /// Name family detected for the motion.
-    pub motion_family: &'static str,
-    /// Number of rig joints bound to a motion joint.
-    pub bound: usize,
-    /// One entry per rig joint, in rig order.
-    pub entries: Vec<EntryReport>,
-    /// Rig joints bound to nothing.
-    pub unmatched_rig: Vec<String>,
-    /// Motion joints bound to nothing.
-    pub unmatched_motion: Vec<String>,
-    /// Known ambiguities (codes in docs/mapping.md).
-    pub warnings: Vec<DiagnosticReport>,
-}
 
 fn side_name(s: Side) -> &'static str {
     match s {
@@ -162,34 +124,6 @@ pub fn make_mapping(
             mapping::read_mapping(&f.text, rig, motion).map_err(|e| anyhow!("{}: {e}", f.path))
         }
     }
-}
-
-/// A rest/bind orientation difference above the warning threshold.
-#[derive(Debug, Clone, Serialize)]
-pub struct RestDifferenceReport {
-    /// Rig joint.
-    pub rig: String,
-    /// Motion joint.
-    pub motion: String,
-    /// Angle between the model-space orientations, degrees.
-    pub degrees: f32,
-}
-
-/// What binding one `--anim` file did.
-#[derive(Debug, Clone, Serialize)]
-pub struct MotionReport {
-    /// The motion file.
-    pub file: String,
-    /// The joint mapping used.
-    pub mapping: MappingReport,
-    /// Whether `--retarget` was used.
-    pub retargeted: bool,
-    /// With `--retarget`: factor applied to root translation (target/source leg length).
-    pub leg_scale: Option<f32>,
-    /// Without `--retarget`: bound pairs whose orientations differ by more than the threshold.
-    pub rest_differences: Vec<RestDifferenceReport>,
-    /// Names of the clips added to the output.
-    pub clips: Vec<String>,
 }
 
 /// Binds the clips of a motion file to `scene`'s skeleton (see docs/cli.md, `convert --anim`).
@@ -360,24 +294,6 @@ impl SplitPlan {
     pub fn is_empty(&self) -> bool {
         self.at.is_empty() && self.masks.is_empty()
     }
-}
-
-/// One clip made by a split.
-#[derive(Debug, Clone, Serialize)]
-pub struct PartReport {
-    /// Clip name (`walk.upper`).
-    pub name: String,
-    /// Joints the clip drives, in track order.
-    pub joints: Vec<String>,
-}
-
-/// What a split did to one source clip.
-#[derive(Debug, Clone, Serialize)]
-pub struct SplitReport {
-    /// The source clip.
-    pub clip: String,
-    /// The clips made from it.
-    pub parts: Vec<PartReport>,
 }
 
 fn part(c: &SceneClip) -> PartReport {

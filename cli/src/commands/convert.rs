@@ -5,107 +5,24 @@
 //! and `lod`. Field names are a stable interface documented in docs/cli.md.
 
 use crate::cli::ConvertArgs;
-use crate::commands::inspect::{
-    clip_report, diag_report, mesh_report, num, DiagnosticReport, KeyCounts, LodReport,
-};
 use crate::output::{check_output_path, print_json, write_atomic, Ctx};
-use crate::steps::{self, MappingFile, MotionReport, SplitPlan, SplitReport};
+use crate::report::{
+    clip_report, diag_report, mesh_report, num, ClipOut, ConvertReport, FileReport, MeshOut,
+    OutputDetails,
+};
+use crate::report::{MotionReport, SplitReport};
+use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
 use rayon::prelude::*;
-use serde::Serialize;
 use sinew_pipeline::compile::{CompileOptions, CompileReport};
-use sinew_pipeline::compress::{ClipCompressionReport, CompressOptions};
+use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_scene::Scene;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-
-/// The whole report of `sinew convert --json`.
-#[derive(Debug, Serialize)]
-pub struct ConvertReport {
-    /// Inputs given.
-    pub inputs: usize,
-    /// Outputs written.
-    pub converted: usize,
-    /// Inputs that failed.
-    pub failed: usize,
-    /// One entry per input, in command-line order.
-    pub files: Vec<FileReport>,
-}
-
-/// One input of a convert run.
-#[derive(Debug, Serialize)]
-pub struct FileReport {
-    /// The input path as given.
-    pub input: String,
-    /// The output path.
-    pub output: String,
-    /// `converted` or `failed`.
-    pub status: &'static str,
-    /// The error (one line) when failed, else `null`.
-    pub error: Option<String>,
-    /// What was written (absent when failed).
-    #[serde(flatten)]
-    pub details: Option<OutputDetails>,
-}
-
-/// What one written `.sinew` holds and how it was made.
-#[derive(Debug, Serialize)]
-pub struct OutputDetails {
-    /// Size of the written file, bytes.
-    pub bytes: u64,
-    /// Source format of the input.
-    pub format: &'static str,
-    /// Joints in the skeleton (0 without one).
-    pub joints: usize,
-    /// Meshes with their LODs.
-    pub meshes: Vec<MeshOut>,
-    /// Clips as written.
-    pub clips: Vec<ClipOut>,
-    /// One entry per `--anim` file.
-    pub motions: Vec<MotionReport>,
-    /// Clips made by `--clips` (empty without it).
-    pub cuts: Vec<String>,
-    /// What `--at`/`--mask` did to each clip (empty without them).
-    pub splits: Vec<SplitReport>,
-    /// Every diagnostic raised on the way: importer, mapping, retargeting.
-    pub diagnostics: Vec<DiagnosticReport>,
-}
-
-/// One mesh of the output.
-#[derive(Debug, Serialize)]
-pub struct MeshOut {
-    /// Mesh name.
-    pub name: String,
-    /// Vertices of LOD 0.
-    pub vertices: usize,
-    /// Triangles of LOD 0.
-    pub triangles: usize,
-    /// Generated LODs, most detailed first (same fields as `inspect`).
-    pub lods: Vec<LodReport>,
-}
-
-/// One clip of the output.
-#[derive(Debug, Serialize)]
-pub struct ClipOut {
-    /// Clip name.
-    pub name: String,
-    /// Duration, seconds.
-    pub duration: f32,
-    /// Nominal frames per second.
-    pub sample_rate: f32,
-    /// Distinct key times.
-    pub key_times: usize,
-    /// Key counts.
-    pub keys: KeyCounts,
-    /// Number of joints the clip drives.
-    pub driven_joints: usize,
-    /// What compressing the clip reached; `null` with `--no-compress`.
-    pub compression: Option<ClipCompressionReport>,
-}
 
 /// Builds the details of an output from the final scene and what writing it reported.
 pub fn details(

@@ -1,9 +1,10 @@
 //! `sinew map RIG MOTION`: how a motion's joints bind to a rig's joints, as a table (stderr) or JSON
-//! ([`crate::steps::MappingReport`]), optionally saved as a mapping file for `convert --map`.
+//! ([`crate::report::MappingReport`]), optionally saved as a mapping file for `convert --map`.
 
 use crate::cli::MapArgs;
 use crate::output::{print_json, write_atomic, Ctx};
-use crate::steps::{self, MappingFile, MappingReport};
+use crate::report::MappingReport;
+use crate::steps::{self, MappingFile};
 use crate::Status;
 use anyhow::bail;
 use std::fmt::Write as _;

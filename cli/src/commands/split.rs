@@ -1,5 +1,5 @@
 //! `sinew split FILE --at JOINT [--mask NAME=J,...] -o OUT.sinew`: partial-body clips. The report is
-//! the same per-output object as `convert` ([`crate::commands::convert::FileReport`]).
+//! the same per-output object as `convert` ([`crate::report::FileReport`]).
 
 use crate::cli::SplitArgs;
 use crate::commands::convert::{details, emit_one, write_scene};

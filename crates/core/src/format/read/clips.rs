@@ -1,0 +1,325 @@
+//! Decoders of the clip section: plain and compressed clip records.
+
+use super::cursor::{f32s_of, Cur, Result, Strs};
+use crate::clip::{Channel, Track};
+use crate::format::error::FormatErrorKind as K;
+use crate::format::write::{
+    CLIP_ADDITIVE, CLIP_LOOPING, CLIP_QUANTIZED, ENCODING_F32, KIND_ANIMATED, KIND_BIND,
+    KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
+};
+use crate::Clip;
+use glam::{Quat, Vec3};
+
+pub(super) fn clips(c: &mut Cur, strs: &Strs) -> Result<Vec<Clip>> {
+    let count = c.u32()?;
+    let at = c.pos;
+    let record = c.u32()?;
+    if (record as usize) < TRACK_RECORD || record % 4 != 0 {
+        return Err(c.err_at(
+            at,
+            K::BadValue {
+                what: "track record size",
+                value: record.into(),
+            },
+        ));
+    }
+    c.skip(8)?;
+    // A clip needs at least its 32-byte header and one key time.
+    let count = c.check_count(count.into(), 36, "clips")?;
+    let mut out = Vec::with_capacity(count);
+    for _ in 0..count {
+        out.push(clip(c, strs, record as usize)?);
+    }
+    Ok(out)
+}
+
+pub(super) fn channel(c: &mut Cur, n: usize) -> Result<(u8, [f32; 4], u32)> {
+    let at = c.pos;
+    let kind = c.u8()?;
+    let encoding = c.u8()?;
+    c.skip(2)?;
+    if encoding != ENCODING_F32 {
+        return Err(c.err_at(at + 1, K::UnsupportedEncoding { encoding }));
+    }
+    if kind > KIND_ANIMATED {
+        return Err(c.err_at(
+            at,
+            K::BadValue {
+                what: "channel kind",
+                value: kind.into(),
+            },
+        ));
+    }
+    let raw: [u8; 16] = c.array()?;
+    let mut v = [0f32; 4];
+    for (o, f) in v.iter_mut().zip(f32s_of(&raw)) {
+        *o = f;
+    }
+    let offset = u32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]);
+    if kind == KIND_CONSTANT && !v[..n].iter().all(|x| x.is_finite()) {
+        return Err(c.err_at(
+            at + 4,
+            K::NonFinite {
+                what: "constant channel value",
+            },
+        ));
+    }
+    Ok((kind, v, offset))
+}
+
+pub(super) fn vec_channel((kind, v, offset): (u8, [f32; 4], u32)) -> Channel<Vec3> {
+    match kind {
+        KIND_BIND => Channel::Bind,
+        KIND_CONSTANT => Channel::Constant(Vec3::new(v[0], v[1], v[2])),
+        _ => Channel::Animated(offset),
+    }
+}
+
+pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
+    c.align()?;
+    let start = c.pos;
+    let name = strs.read(c, "clip name string")?;
+    let flags = c.u32()?;
+    if flags & !(CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED) != 0 {
+        return Err(c.err_at(
+            start + 4,
+            K::BadValue {
+                what: "clip flags",
+                value: flags.into(),
+            },
+        ));
+    }
+    let duration = c.f32()?;
+    let sample_rate = c.f32()?;
+    if !duration.is_finite() || !sample_rate.is_finite() {
+        return Err(c.err_at(
+            start + 8,
+            K::NonFinite {
+                what: "clip duration or sample rate",
+            },
+        ));
+    }
+    if flags & CLIP_QUANTIZED != 0 {
+        return compressed_clip(c, strs, start, name, flags, duration, sample_rate);
+    }
+    let key_count = c.u32()?;
+    let stride = c.u32()?;
+    let track_count = c.u32()?;
+    c.skip(4)?;
+    let times = c.f32s(key_count.into(), "key times")?;
+    c.align()?;
+    let track_count = c.check_count(track_count.into(), record, "tracks")?;
+    let mut tracks = Vec::with_capacity(track_count);
+    for _ in 0..track_count {
+        let t0 = c.pos;
+        let joint = strs.read(c, "track joint string")?;
+        let translation = vec_channel(channel(c, 3)?);
+        let (kind, v, offset) = channel(c, 4)?;
+        let rotation = match kind {
+            KIND_BIND => Channel::Bind,
+            KIND_CONSTANT => Channel::Constant(Quat::from_array(v)),
+            _ => Channel::Animated(offset),
+        };
+        let scale = vec_channel(channel(c, 3)?);
+        c.skip(record - (c.pos - t0))?;
+        tracks.push(Track {
+            joint,
+            translation,
+            rotation,
+            scale,
+        });
+    }
+    c.align()?;
+    let frame_floats = u64::from(key_count).saturating_mul(stride.into());
+    let frames = c.f32s(frame_floats, "frame floats")?;
+    Clip::from_parts(
+        name,
+        duration,
+        sample_rate,
+        flags & CLIP_LOOPING != 0,
+        flags & CLIP_ADDITIVE != 0,
+        times,
+        tracks,
+        stride as usize,
+        frames,
+    )
+    .map_err(|e| c.err_at(start, K::Invalid(e.to_string())))
+}
+
+/// The compressed clip record (clip flag bit 2), from its key count on. Layout: docs/format.md.
+pub(super) fn compressed_clip(
+    c: &mut Cur,
+    strs: &Strs,
+    start: usize,
+    name: String,
+    flags: u32,
+    duration: f32,
+    sample_rate: f32,
+) -> Result<Clip> {
+    use crate::compressed::{QuantizedParts, SegmentComponent};
+    let key_count = c.u32()?;
+    let comp_at = c.pos;
+    let components = c.u32()?;
+    let track_count = c.u32()?;
+    let seg_at = c.pos;
+    let segment_len = c.u32()?;
+    if segment_len == 0 {
+        return Err(c.err_at(
+            seg_at,
+            K::BadValue {
+                what: "segment length",
+                value: 0,
+            },
+        ));
+    }
+    let times = c.f32s(key_count.into(), "key times")?;
+    c.align()?;
+    let track_count = c.check_count(track_count.into(), 8, "tracks")?;
+    let mut kinds = Vec::with_capacity(track_count);
+    let mut names = Vec::with_capacity(track_count);
+    for _ in 0..track_count {
+        names.push(strs.read(c, "track joint string")?);
+        let at = c.pos;
+        let k: [u8; 4] = c.array()?;
+        if k[..3]
+            .iter()
+            .any(|&x| !matches!(x, KIND_BIND | KIND_CONSTANT | KIND_QUANTIZED))
+        {
+            return Err(c.err_at(
+                at,
+                K::BadValue {
+                    what: "compressed channel kind",
+                    value: u64::from(u32::from_le_bytes(k)),
+                },
+            ));
+        }
+        kinds.push(k);
+    }
+    c.align()?;
+    let const_floats: u64 = kinds
+        .iter()
+        .map(|k| {
+            [3u64, 4, 3]
+                .iter()
+                .zip(k)
+                .filter(|(_, &x)| x == KIND_CONSTANT)
+                .map(|(n, _)| n)
+                .sum::<u64>()
+        })
+        .sum();
+    let const_at = c.pos;
+    let constants = c.f32s(const_floats, "constant floats")?;
+    if !constants.iter().all(|v| v.is_finite()) {
+        return Err(c.err_at(
+            const_at,
+            K::NonFinite {
+                what: "constant channel value",
+            },
+        ));
+    }
+    c.align()?;
+    let mut tracks = Vec::with_capacity(track_count);
+    let mut ci = 0usize;
+    let mut take = |n: usize| {
+        let v = constants.get(ci..ci + n).unwrap_or(&[0.0; 4][..n]).to_vec();
+        ci += n;
+        v
+    };
+    for (joint, k) in names.into_iter().zip(&kinds) {
+        // Animated channels are numbered below, once every track is known.
+        let translation = match k[0] {
+            KIND_CONSTANT => Channel::Constant(Vec3::from_slice(&take(3))),
+            KIND_QUANTIZED => Channel::Animated(0),
+            _ => Channel::Bind,
+        };
+        let rotation = match k[1] {
+            KIND_CONSTANT => Channel::Constant(Quat::from_slice(&take(4))),
+            KIND_QUANTIZED => Channel::Animated(0),
+            _ => Channel::Bind,
+        };
+        let scale = match k[2] {
+            KIND_CONSTANT => Channel::Constant(Vec3::from_slice(&take(3))),
+            KIND_QUANTIZED => Channel::Animated(0),
+            _ => Channel::Bind,
+        };
+        tracks.push(Track {
+            joint,
+            translation,
+            rotation,
+            scale,
+        });
+    }
+    // Number the components in order (translation, rotation, scale per track).
+    let mut next = 0u32;
+    let mut rotations = Vec::new();
+    for t in &mut tracks {
+        if let Channel::Animated(o) = &mut t.translation {
+            *o = next;
+            next += 3;
+        }
+        if let Channel::Animated(o) = &mut t.rotation {
+            *o = next;
+            rotations.push(next);
+            next += 3;
+        }
+        if let Channel::Animated(o) = &mut t.scale {
+            *o = next;
+            next += 3;
+        }
+    }
+    if next != components {
+        return Err(c.err_at(
+            comp_at,
+            K::BadValue {
+                what: "component count",
+                value: components.into(),
+            },
+        ));
+    }
+    let range_floats = c.f32s(u64::from(components) * 2, "component ranges")?;
+    let ranges = range_floats.chunks_exact(2).map(|r| [r[0], r[1]]).collect();
+    c.align()?;
+    let seg_count = u64::from(key_count).div_ceil(u64::from(segment_len));
+    let seg_bytes = c.elements(
+        seg_count.saturating_mul(components.into()),
+        3,
+        "segment component entries",
+    )?;
+    let segments = seg_bytes
+        .chunks_exact(3)
+        .map(|b| SegmentComponent {
+            bits: b[0],
+            min: b[1],
+            extent: b[2],
+        })
+        .collect();
+    c.align()?;
+    // The data's exact length follows from the bit widths: per segment, ceil(record bits * keys / 8).
+    let comps = components as usize;
+    let mut needed = 0u64;
+    for (s, seg) in seg_bytes.chunks(comps.max(1) * 3).enumerate() {
+        let bits: u64 =
+            seg.chunks_exact(3).map(|b| u64::from(b[0])).sum::<u64>() + 2 * rotations.len() as u64;
+        let first = s as u64 * u64::from(segment_len);
+        let keys = u64::from(segment_len).min(u64::from(key_count).saturating_sub(first));
+        needed = needed.saturating_add((bits * keys).div_ceil(8));
+    }
+    let data = c.elements(needed, 1, "compressed data bytes")?.to_vec();
+    let parts = QuantizedParts {
+        segment_len,
+        ranges,
+        segments,
+        data,
+    };
+    Clip::from_quantized(
+        name,
+        duration,
+        sample_rate,
+        flags & CLIP_LOOPING != 0,
+        flags & CLIP_ADDITIVE != 0,
+        times,
+        tracks,
+        parts,
+    )
+    .map_err(|e| c.err_at(start, K::Invalid(e.to_string())))
+}

@@ -1,0 +1,109 @@
+//! The entry point: a loaded document to a Scene (skeleton, materials, meshes, clips, diagnostics).
+
+use super::animation::import_animations;
+use super::document::{at, load};
+use super::mesh::{import_meshes, materials};
+use super::skin::{build_rig, graph};
+use crate::{ImportError, ImportOptions, Resolver};
+use sinew_scene::{Diagnostic, Scene, SourceFormat};
+
+/// Imports a glTF 2.0 file (`.gltf` or `.glb`). See docs/formats/gltf.md.
+pub fn import(
+    file_name: &str,
+    bytes: &[u8],
+    resolve: Resolver<'_>,
+    options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    // The gltf crate's typed accessors unwrap values its validation does not always cover; a panic
+    // there becomes an ordinary error instead of aborting a batch run.
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_inner(file_name, bytes, resolve, options)
+    }))
+    .unwrap_or_else(|_| {
+        Err(ImportError::in_section(
+            file_name,
+            "json",
+            "the document holds a value the gltf crate could not interpret",
+        ))
+    })
+}
+
+pub(super) fn import_inner(
+    file_name: &str,
+    bytes: &[u8],
+    resolve: Resolver<'_>,
+    options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    let file = file_name;
+    let l = load(file, bytes, resolve)?;
+    let doc = &l.doc;
+    let mut scene = Scene::new(SourceFormat::Gltf);
+    let g = graph(file, doc, &mut scene.diagnostics)?;
+
+    // The skeleton: the chosen skin, or the whole node forest when there is no skin but animations.
+    let skins: Vec<gltf::Skin<'_>> = doc.skins().collect();
+    let rig = if skins.is_empty() {
+        if doc.animations().next().is_some() && !g.local.is_empty() {
+            let all: Vec<usize> = (0..g.local.len()).collect();
+            scene.diagnostics.push(Diagnostic::info(
+                "gltf-node-skeleton",
+                "the file has animations but no skin: every node becomes a joint",
+            ));
+            Some(build_rig(file, &l, &g, &all, None)?)
+        } else {
+            None
+        }
+    } else {
+        let chosen = options.gltf_skin.unwrap_or(0);
+        let skin = skins.get(chosen).cloned().ok_or_else(|| {
+            at(
+                file,
+                "skins",
+                format!("skin {chosen} was requested; the file has {}", skins.len()),
+            )
+        })?;
+        if skins.len() > 1 && options.gltf_skin.is_none() {
+            let others: Vec<String> = skins
+                .iter()
+                .skip(1)
+                .map(|s| match s.name() {
+                    Some(n) => format!("{} {n:?}", s.index()),
+                    None => s.index().to_string(),
+                })
+                .collect();
+            scene.diagnostics.push(
+                Diagnostic::warning(
+                    "gltf-several-skins",
+                    format!(
+                        "the file has {} skins; imported skin 0, not skins {} (choose with the gltf_skin option)",
+                        skins.len(),
+                        others.join(", ")
+                    ),
+                )
+                .with_figure("skins", skins.len() as f64),
+            );
+        }
+        let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
+        if joints.is_empty() {
+            return Err(at(
+                file,
+                format!("skins[{chosen}].joints"),
+                "the skin has no joints",
+            ));
+        }
+        Some(build_rig(file, &l, &g, &joints, Some(skin))?)
+    };
+
+    scene.materials = materials(doc);
+    import_meshes(file, &l, &g, rig.as_ref(), &mut scene)?;
+    if let Some(rig) = &rig {
+        import_animations(file, &l, &g, rig, &mut scene)?;
+    } else if doc.animations().next().is_some() {
+        scene.diagnostics.push(Diagnostic::warning(
+            "gltf-animations-skipped",
+            "animations need a skeleton; the file has none",
+        ));
+    }
+    scene.skeleton = rig.map(|r| r.skeleton);
+    Ok(scene)
+}

@@ -1,0 +1,385 @@
+//! Loading a glTF document: the GLB container, JSON parsing and validation with JSON paths in errors,
+//! buffers (external, data URI, GLB chunk) and typed accessor reads.
+
+use super::accessor::{read_f32, read_u32};
+use crate::{ImportError, Resolver};
+
+/// A parsed document with its buffers loaded and checked.
+pub(super) struct Loaded {
+    pub(super) doc: gltf::Document,
+    pub(super) buffers: Vec<Vec<u8>>,
+}
+
+/// Splits a GLB container into its JSON chunk and optional BIN chunk, checking every length.
+pub(super) fn split_glb<'a>(
+    file: &str,
+    bytes: &'a [u8],
+) -> Result<(&'a [u8], Option<&'a [u8]>), ImportError> {
+    let u32_at = |o: usize| -> Option<u32> {
+        let b = bytes.get(o..o.checked_add(4)?)?;
+        Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let err = |o: usize, m: String| ImportError::at_offset(file, "glb", o as u64, m);
+    let version =
+        u32_at(4).ok_or_else(|| err(4, "file ends inside the 12-byte GLB header".into()))?;
+    if version != 2 {
+        return Err(err(
+            4,
+            format!("GLB version {version}; only version 2 is supported"),
+        ));
+    }
+    let length =
+        u32_at(8).ok_or_else(|| err(8, "file ends inside the GLB header".into()))? as usize;
+    if length > bytes.len() {
+        return Err(err(
+            8,
+            format!(
+                "header says the file is {length} bytes; only {} are present",
+                bytes.len()
+            ),
+        ));
+    }
+    let bytes = &bytes[..length];
+    let mut chunks = Vec::new();
+    let mut o = 12usize;
+    while o < bytes.len() {
+        let len =
+            u32_at(o).ok_or_else(|| err(o, "file ends inside a chunk header".into()))? as usize;
+        let ty = u32_at(o + 4).ok_or_else(|| err(o, "file ends inside a chunk header".into()))?;
+        let start = o + 8;
+        let end = start
+            .checked_add(len)
+            .filter(|&e| e <= bytes.len())
+            .ok_or_else(|| {
+                err(
+                    o,
+                    format!(
+                        "chunk of {len} bytes runs past the end of the file ({} bytes)",
+                        bytes.len()
+                    ),
+                )
+            })?;
+        chunks.push((o, ty, &bytes[start..end]));
+        o = end;
+    }
+    let mut it = chunks.into_iter();
+    let (_, ty, json) = it
+        .next()
+        .ok_or_else(|| err(12, "GLB has no chunks; the first must be JSON".into()))?;
+    if ty != 0x4E4F_534A {
+        return Err(err(
+            12,
+            format!("first chunk has type 0x{ty:08x}; expected JSON"),
+        ));
+    }
+    let mut bin = None;
+    for (off, ty, data) in it {
+        if ty == 0x004E_4942 {
+            if bin.is_some() {
+                return Err(err(off, "a second BIN chunk".into()));
+            }
+            bin = Some(data);
+        }
+    }
+    Ok((json, bin))
+}
+
+/// The JSON path (`meshes[0].primitives`) of the value that contains byte `offset` of `text`.
+pub fn json_path_at(text: &[u8], offset: usize) -> String {
+    enum Frame {
+        Obj(Option<String>, bool),
+        Arr(usize),
+    }
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut i = 0;
+    let end = offset.min(text.len());
+    while i < end {
+        let c = text[i];
+        match c {
+            b'"' => {
+                let start = i + 1;
+                i += 1;
+                while i < text.len() && text[i] != b'"' {
+                    if text[i] == b'\\' {
+                        i += 1;
+                    }
+                    i += 1;
+                }
+                if let Some(Frame::Obj(key, expecting)) = stack.last_mut() {
+                    if *expecting {
+                        let s = text.get(start..i.min(text.len())).unwrap_or(&[]);
+                        *key = Some(String::from_utf8_lossy(s).into_owned());
+                        *expecting = false;
+                    }
+                }
+            }
+            b'{' => stack.push(Frame::Obj(None, true)),
+            b'[' => stack.push(Frame::Arr(0)),
+            b'}' | b']' => {
+                stack.pop();
+            }
+            b',' => match stack.last_mut() {
+                Some(Frame::Arr(n)) => *n += 1,
+                Some(Frame::Obj(_, expecting)) => *expecting = true,
+                None => {}
+            },
+            _ => {}
+        }
+        i += 1;
+    }
+    let mut path = String::new();
+    for f in &stack {
+        match f {
+            Frame::Obj(Some(k), _) => {
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(k);
+            }
+            Frame::Obj(None, _) => {}
+            Frame::Arr(n) => path.push_str(&format!("[{n}]")),
+        }
+    }
+    if path.is_empty() {
+        "(root)".into()
+    } else {
+        path
+    }
+}
+
+pub(super) fn section_of(path: &str) -> &str {
+    let end = path.find(['[', '.']).unwrap_or(path.len());
+    &path[..end]
+}
+
+/// An error at a JSON path; the section is the path's top-level property.
+pub(super) fn at(file: &str, path: impl Into<String>, message: impl Into<String>) -> ImportError {
+    let path = path.into();
+    let section = section_of(&path).to_string();
+    ImportError::at_path(file, &section, path, message)
+}
+
+/// Byte offset of a 1-based line and column.
+pub(super) fn offset_of(text: &[u8], line: usize, column: usize) -> usize {
+    let mut l = 1;
+    let mut i = 0;
+    while i < text.len() && l < line {
+        if text[i] == b'\n' {
+            l += 1;
+        }
+        i += 1;
+    }
+    (i + column.saturating_sub(1)).min(text.len())
+}
+
+pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, ImportError> {
+    if json.starts_with(b"glTF") {
+        return Err(ImportError::in_section(file, "json", "nested GLB header"));
+    }
+    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(json)).map_err(|_| {
+        ImportError::in_section(file, "json", "the gltf crate panicked while validating")
+    })?;
+    parsed.map_err(|e| match e {
+        gltf::Error::Deserialize(de) => {
+            let off = offset_of(json, de.line(), de.column());
+            let mut path = json_path_at(json, off);
+            // serde notices a missing field at the end of its object, after the last key it read.
+            if de.to_string().starts_with("missing field") {
+                if let Some(dot) = path.rfind('.') {
+                    if !path[dot..].contains('[') {
+                        path.truncate(dot);
+                    }
+                }
+            }
+            at(file, path, format!("{de}"))
+        }
+        gltf::Error::Validation(errors) => {
+            let (path, kind) = match errors.first() {
+                Some((p, k)) => (p.to_string(), format!("{k}")),
+                None => ("(root)".into(), "invalid".into()),
+            };
+            let more = if errors.len() > 1 {
+                format!(" ({} more validation errors)", errors.len() - 1)
+            } else {
+                String::new()
+            };
+            at(file, path, format!("{kind}{more}"))
+        }
+        other => ImportError::in_section(file, "json", other.to_string()),
+    })
+}
+
+/// Decodes standard or URL-safe base64, ignoring whitespace and padding.
+pub(super) fn base64_decode(s: &str) -> Option<Vec<u8>> {
+    let mut out = Vec::with_capacity(s.len() / 4 * 3 + 3);
+    let mut acc = 0u32;
+    let mut bits = 0;
+    for c in s.bytes() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            b'=' | b' ' | b'\n' | b'\r' | b'\t' => continue,
+            _ => return None,
+        } as u32;
+        acc = (acc << 6) | v;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Some(out)
+}
+
+/// Decodes `%xx` escapes of a relative URI.
+pub(super) fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    let hex = |c: u8| (c as char).to_digit(16);
+    while i < b.len() {
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Loaded, ImportError> {
+    let (json, bin) = if bytes.starts_with(b"glTF") {
+        split_glb(file, bytes)?
+    } else {
+        (bytes, None)
+    };
+    let gltf = parse_document(file, json)?;
+    let doc = gltf.document;
+    let mut buffers = Vec::new();
+    for b in doc.buffers() {
+        let path = format!("buffers[{}]", b.index());
+        let data: Vec<u8> = match b.source() {
+            gltf::buffer::Source::Bin => {
+                if b.index() != 0 {
+                    return Err(at(
+                        file,
+                        path,
+                        "only buffer 0 may refer to the GLB BIN chunk",
+                    ));
+                }
+                bin.ok_or_else(|| at(file, &path, "refers to the GLB BIN chunk, which is absent"))?
+                    .to_vec()
+            }
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, payload) = rest
+                        .split_once(";base64,")
+                        .ok_or_else(|| at(file, &path, "data URI is not base64"))?;
+                    base64_decode(payload)
+                        .ok_or_else(|| at(file, &path, "data URI holds invalid base64"))?
+                } else {
+                    resolve(&percent_decode(uri)).map_err(|e| {
+                        at(
+                            file,
+                            &path,
+                            format!("cannot load external buffer {uri:?}: {e}"),
+                        )
+                    })?
+                }
+            }
+        };
+        if data.len() < b.length() {
+            let what = match b.source() {
+                gltf::buffer::Source::Bin => "the GLB BIN chunk",
+                gltf::buffer::Source::Uri(_) => "its data",
+            };
+            return Err(at(
+                file,
+                path,
+                format!(
+                    "byteLength is {} but {what} holds only {} bytes",
+                    b.length(),
+                    data.len()
+                ),
+            ));
+        }
+        let mut data = data;
+        data.truncate(b.length());
+        buffers.push(data);
+    }
+    Ok(Loaded { doc, buffers })
+}
+
+/// Number of skins in a glTF file, so that a caller can import each one with
+/// [`ImportOptions::gltf_skin`].
+pub fn skin_count(file_name: &str, bytes: &[u8]) -> Result<usize, ImportError> {
+    let json = if bytes.starts_with(b"glTF") {
+        split_glb(file_name, bytes)?.0
+    } else {
+        bytes
+    };
+    Ok(parse_document(file_name, json)?.document.skins().count())
+}
+
+/// Reads an accessor as floats with exactly `comps` components per element.
+pub(super) fn floats(
+    file: &str,
+    l: &Loaded,
+    acc: &gltf::Accessor<'_>,
+    comps: usize,
+    path: &str,
+) -> Result<Vec<f32>, ImportError> {
+    let a = format!("accessors[{}]", acc.index());
+    if super::accessor::component_count(acc.dimensions()) != comps {
+        return Err(at(
+            file,
+            path,
+            format!(
+                "{a} has type {:?}; {comps} components expected",
+                acc.dimensions()
+            ),
+        ));
+    }
+    let v = read_f32(acc, &l.buffers).map_err(|m| at(file, &a, format!("{m} (used by {path})")))?;
+    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+        return Err(at(
+            file,
+            &a,
+            format!(
+                "element {} holds a non-finite value ({}) (used by {path})",
+                i / comps,
+                v[i]
+            ),
+        ));
+    }
+    Ok(v)
+}
+
+pub(super) fn uints(
+    file: &str,
+    l: &Loaded,
+    acc: &gltf::Accessor<'_>,
+    comps: usize,
+    path: &str,
+) -> Result<Vec<u32>, ImportError> {
+    let a = format!("accessors[{}]", acc.index());
+    if super::accessor::component_count(acc.dimensions()) != comps {
+        return Err(at(
+            file,
+            path,
+            format!(
+                "{a} has type {:?}; {comps} components expected",
+                acc.dimensions()
+            ),
+        ));
+    }
+    read_u32(acc, &l.buffers).map_err(|m| at(file, &a, format!("{m} (used by {path})")))
+}

@@ -1,0 +1,521 @@
+//! Incremental error evaluation of a quantisation while its bit widths change.
+
+use super::metric::{exceeds, joint_limits, Rig};
+use super::quantize::{locate, raw_rotation, Kind, Layout, Quant};
+use super::reduce::{WChan, Work};
+use sinew_core::clip::{nlerp, normalize_rotation};
+use sinew_core::compressed::three_without;
+use sinew_core::glam::{Affine3A, Quat, Vec3};
+use sinew_core::{Clip, Transform};
+
+/// What every quantization of one clip is measured against.
+pub(super) struct Ctx<'a> {
+    pub(super) rig: &'a Rig,
+    pub(super) like: &'a Clip,
+    /// Source key times.
+    pub(super) times: &'a [f32],
+    /// Per source time, per joint: the source's error points.
+    pub(super) src: Vec<Vec<[Vec3; 3]>>,
+    /// Per source time, per joint: the source's model-space rotation (the product of the local
+    /// rotations down the chain).
+    pub(super) src_rot: Vec<Vec<Quat>>,
+    /// Per joint: the largest error allowed.
+    pub(super) limits: Vec<f32>,
+    /// Every scale of the source poses is positive and uniform, so that model-space rotations are
+    /// the products of the local rotations (what chain compensation relies on).
+    pub(super) uniform: bool,
+}
+
+impl<'a> Ctx<'a> {
+    pub(super) fn new(rig: &'a Rig, like: &'a Clip, times: &'a [f32], tolerance: f32) -> Ctx<'a> {
+        let poses = rig.poses(like, times);
+        let src = rig.all_points(&poses);
+        let parents = rig.skeleton.parents();
+        let src_rot = poses
+            .iter()
+            .map(|pose| {
+                let mut out: Vec<Quat> = Vec::with_capacity(pose.len());
+                for (j, t) in pose.iter().enumerate() {
+                    let p = parents.get(j).copied().flatten().map(usize::from);
+                    let pr = p.and_then(|p| out.get(p).copied());
+                    out.push(pr.map_or(t.rotation, |pr| pr * t.rotation));
+                }
+                out
+            })
+            .collect();
+        let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
+        let uniform = poses.iter().flatten().all(|t| {
+            let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
+            lo > 0.0 && hi <= lo * (1.0 + 1e-4)
+        });
+        Ctx {
+            rig,
+            like,
+            times,
+            src,
+            src_rot,
+            limits,
+            uniform,
+        }
+    }
+}
+
+/// Undo records of one tentative change of [`Eval`].
+#[derive(Default)]
+pub(super) struct Undo {
+    pub(super) bits: Option<(usize, u8)>,
+    pub(super) comps: Vec<(usize, usize, u32, f32)>,
+    pub(super) key_rot: Vec<(usize, usize, Quat)>,
+    pub(super) poses: Vec<(usize, usize, Transform, Affine3A, Affine3A)>,
+}
+
+/// A quantized clip under construction, with its measured error kept up to date while bit widths
+/// change one at a time.
+///
+/// Rotations are quantized with *chain compensation*: at every key, joints are quantized parents
+/// first, and a joint's stored rotation is not its source local rotation but the one that, under
+/// its parent's already quantized model rotation, gives the joint's source model rotation. So a
+/// joint's orientation error does not pass to its descendants' orientations (only to their
+/// positions, through its own bone), and far-reaching joints need fewer bits.
+///
+/// Changing a component of one segment requantizes only that segment's keys of the joint's subtree,
+/// and re-measures only the source times that read those keys.
+pub(super) struct Eval<'a> {
+    pub(super) ctx: &'a Ctx<'a>,
+    pub(super) layout: &'a Layout,
+    pub(super) compensate: bool,
+    /// Per source time: the keys and blend factor the sampler uses.
+    pub(super) at: Vec<(usize, usize, f32)>,
+    /// Per key: its source time.
+    pub(super) key_src: Vec<Option<usize>>,
+    /// Per track: its joint. Per joint: its track.
+    pub(super) joint: Vec<usize>,
+    pub(super) track_of: Vec<Option<usize>>,
+    /// Per track and channel kind (T, R, S): the first component, if quantized.
+    pub(super) first: Vec<[Option<usize>; 3]>,
+    /// Per joint: itself, then its descendants in skeleton order.
+    pub(super) subtree: Vec<Vec<usize>>,
+    /// Per joint: its local transform where the clip does not animate it.
+    pub(super) base: Vec<Transform>,
+    /// Per segment, per component: bit width, and the quantization parameters it gives.
+    pub(super) bits: Vec<u8>,
+    pub(super) params: Vec<Quant>,
+    /// Per component, per key: the stored integer and the value it decodes to.
+    pub(super) qi: Vec<Vec<u32>>,
+    pub(super) dec: Vec<Vec<f32>>,
+    /// Per key, per joint: the quantized clip's model rotation at that key.
+    pub(super) key_rot: Vec<Vec<Quat>>,
+    /// Per source time, per joint: local pose and model transform of the quantized clip.
+    pub(super) local: Vec<Vec<Transform>>,
+    /// Per source time, per joint: `local` as an affine transform.
+    pub(super) local_aff: Vec<Vec<Affine3A>>,
+    pub(super) model: Vec<Vec<Affine3A>>,
+    /// Per segment: the source times that read one of its keys.
+    pub(super) seg_times: Vec<Vec<usize>>,
+    pub(super) undo: Undo,
+    /// Per joint, during a change: its stored values changed / its model transforms changed.
+    pub(super) dirty: Vec<bool>,
+    pub(super) moved: Vec<bool>,
+}
+
+impl<'a> Eval<'a> {
+    /// The state of `work` quantized with `bits`. With `check`, also whether every joint is within
+    /// its limit at every source time; the poses are then computed only up to the first time that
+    /// is not (the state is for the check alone).
+    pub(super) fn build(
+        ctx: &'a Ctx<'a>,
+        layout: &'a Layout,
+        work: &Work,
+        bits: Vec<u8>,
+        compensate: bool,
+        check: bool,
+    ) -> (Eval<'a>, bool) {
+        let rig = ctx.rig;
+        let nj = rig.skeleton.len();
+        let parents = rig.skeleton.parents();
+        let at: Vec<(usize, usize, f32)> = ctx
+            .times
+            .iter()
+            .map(|&t| locate(ctx.like, &work.times, t))
+            .collect();
+        let key_src = work
+            .times
+            .iter()
+            .map(|t| ctx.times.binary_search_by(|x| x.total_cmp(t)).ok())
+            .collect();
+        let joint: Vec<usize> = work
+            .tracks
+            .iter()
+            .map(|t| rig.skeleton.find(&t.joint).map_or(0, usize::from))
+            .collect();
+        let mut track_of = vec![None; nj];
+        for (tr, &j) in joint.iter().enumerate() {
+            if let Some(slot) = track_of.get_mut(j) {
+                *slot = Some(tr);
+            }
+        }
+        let mut first = vec![[None; 3]; work.tracks.len()];
+        for (c, comp) in layout.comps.iter().enumerate() {
+            if comp.axis == 0 {
+                first[comp.track][comp.kind as usize] = Some(c);
+            }
+        }
+        let mut subtree: Vec<Vec<usize>> = (0..nj).map(|j| vec![j]).collect();
+        for d in 0..nj {
+            let mut p = parents.get(d).copied().flatten();
+            while let Some(a) = p {
+                let a = usize::from(a);
+                subtree[a].push(d);
+                p = parents.get(a).copied().flatten();
+            }
+        }
+        let mut base: Vec<Transform> = if ctx.like.additive() {
+            vec![Transform::IDENTITY; nj]
+        } else {
+            rig.skeleton.bind_local().to_vec()
+        };
+        for (tr, t) in work.tracks.iter().enumerate() {
+            let Some(slot) = base.get_mut(joint[tr]) else {
+                continue;
+            };
+            if let WChan::Constant(v) = t.t {
+                slot.translation = v;
+            }
+            if let WChan::Constant(q) = t.r {
+                slot.rotation = q;
+            }
+            if let WChan::Constant(v) = t.s {
+                slot.scale = v;
+            }
+        }
+        let mut seg_times = vec![Vec::new(); layout.seg_count];
+        for (i, &(k0, k1, a)) in at.iter().enumerate() {
+            let s0 = k0 / layout.seg_len;
+            if let Some(list) = seg_times.get_mut(s0) {
+                list.push(i);
+            }
+            let s1 = k1 / layout.seg_len;
+            if a != 0.0 && s1 != s0 {
+                if let Some(list) = seg_times.get_mut(s1) {
+                    list.push(i);
+                }
+            }
+        }
+        let nc = layout.comps.len();
+        let n = layout.keys;
+        let mut e = Eval {
+            ctx,
+            layout,
+            compensate,
+            local: vec![base.clone(); at.len()],
+            local_aff: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
+            model: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
+            dirty: vec![true; nj],
+            moved: vec![true; nj],
+            at,
+            key_src,
+            joint,
+            track_of,
+            first,
+            subtree,
+            base,
+            params: (0..bits.len())
+                .map(|i| layout.params(i / nc.max(1), i % nc.max(1), bits[i]))
+                .collect(),
+            bits,
+            qi: vec![vec![0; n]; nc],
+            dec: vec![vec![0.0; n]; nc],
+            key_rot: vec![vec![Quat::IDENTITY; nj]; n],
+            seg_times,
+            undo: Undo::default(),
+        };
+        let all: Vec<usize> = (0..nj).collect();
+        for s in 0..layout.seg_count {
+            e.requantize(s, &all, None, false);
+        }
+        e.dirty.fill(true);
+        e.moved.fill(true);
+        for i in 0..e.at.len() {
+            e.resample(i, &all, false);
+            if check && (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j])) {
+                return (e, false);
+            }
+        }
+        (e, true)
+    }
+
+    /// [`Eval::build`] without the check.
+    pub(super) fn new(
+        ctx: &'a Ctx<'a>,
+        layout: &'a Layout,
+        work: &Work,
+        bits: Vec<u8>,
+        compensate: bool,
+    ) -> Eval<'a> {
+        Eval::build(ctx, layout, work, bits, compensate, false).0
+    }
+
+    pub(super) fn parent(&self, j: usize) -> Option<usize> {
+        self.ctx
+            .rig
+            .skeleton
+            .parents()
+            .get(j)
+            .copied()
+            .flatten()
+            .map(usize::from)
+    }
+
+    /// Quantizes the keys of segment `s` for `joints` (a joint's subtree, or all joints, in
+    /// skeleton order). `changed`: the component (of the first joint) whose bit width changed, so
+    /// that only what depends on it is redone; `None` redoes everything. Sets `dirty`, and records
+    /// undo information when `record`.
+    pub(super) fn requantize(
+        &mut self,
+        s: usize,
+        joints: &[usize],
+        changed: Option<usize>,
+        record: bool,
+    ) {
+        let nc = self.layout.comps.len();
+        for &d in joints {
+            self.dirty[d] = false;
+        }
+        if let Some(c) = changed.filter(|&c| self.layout.comps[c].kind != Kind::R) {
+            // A translation or scale component: nothing else depends on it.
+            if let Some(&j) = joints.first() {
+                for k in self.layout.seg_keys(s) {
+                    let v = self.layout.comps[c].vals[k];
+                    self.dirty[j] |= self.store(s, c, k, v, record, nc);
+                }
+            }
+            return;
+        }
+        for k in self.layout.seg_keys(s) {
+            for (n, &d) in joints.iter().enumerate() {
+                if changed.is_some() && n > 0 && !self.compensate {
+                    break;
+                }
+                let pr = self
+                    .parent(d)
+                    .map_or(Quat::IDENTITY, |p| self.key_rot[k][p]);
+                let mut rot = self.base[d].rotation;
+                let mut rot_changed = false;
+                if let Some(tr) = self.track_of[d] {
+                    let [ft, fr, fs] = self.first[tr];
+                    if changed.is_none() {
+                        for c0 in [ft, fs].into_iter().flatten() {
+                            for c in c0..c0 + 3 {
+                                let v = self.layout.comps[c].vals[k];
+                                self.dirty[d] |= self.store(s, c, k, v, record, nc);
+                            }
+                        }
+                    }
+                    if let Some(c0) = fr {
+                        let comp = &self.layout.comps[c0];
+                        let index = self.layout.index[comp.rot][k];
+                        let vals = match self.key_src[k] {
+                            Some(i) if self.compensate => {
+                                let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
+                                three_without(target, index)
+                            }
+                            _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
+                        };
+                        for (a, v) in vals.into_iter().enumerate() {
+                            rot_changed |= self.store(s, c0 + a, k, v, record, nc);
+                        }
+                        self.dirty[d] |= rot_changed;
+                        let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
+                        rot = normalize_rotation(raw_rotation(index, q));
+                    }
+                }
+                if changed.is_some() && n == 0 && !rot_changed {
+                    // The joint's rotation at this key did not change: nothing below it does.
+                    break;
+                }
+                if record {
+                    self.undo.key_rot.push((k, d, self.key_rot[k][d]));
+                }
+                self.key_rot[k][d] = pr * rot;
+            }
+        }
+    }
+
+    /// Quantizes `v` as component `c` of key `k` (in segment `s`); returns whether the stored
+    /// value changed.
+    pub(super) fn store(
+        &mut self,
+        s: usize,
+        c: usize,
+        k: usize,
+        v: f32,
+        record: bool,
+        nc: usize,
+    ) -> bool {
+        let (q, x) = self.params[s * nc + c].quantize(v);
+        let changed = q != self.qi[c][k] || x.to_bits() != self.dec[c][k].to_bits();
+        if changed {
+            if record {
+                self.undo.comps.push((c, k, self.qi[c][k], self.dec[c][k]));
+            }
+            self.qi[c][k] = q;
+            self.dec[c][k] = x;
+        }
+        changed
+    }
+
+    /// Recomputes the local poses (of dirty joints) and model transforms (of joints that moved:
+    /// dirty, or below a dirty joint) of `joints` at source time `i`; sets `moved`.
+    pub(super) fn resample(&mut self, i: usize, joints: &[usize], record: bool) {
+        for (n, &d) in joints.iter().enumerate() {
+            let parent = self.parent(d);
+            let below = n > 0 && parent.is_some_and(|p| self.moved[p]);
+            self.moved[d] = self.dirty[d] || below;
+            if !self.moved[d] {
+                continue;
+            }
+            if record {
+                self.undo.poses.push((
+                    i,
+                    d,
+                    self.local[i][d],
+                    self.local_aff[i][d],
+                    self.model[i][d],
+                ));
+            }
+            if self.dirty[d] {
+                if let Some(tr) = self.track_of[d] {
+                    self.local[i][d] = self.sampled(tr, i, self.local[i][d]);
+                }
+                self.local_aff[i][d] = self.local[i][d].to_affine();
+            }
+            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i][p]);
+            self.model[i][d] = pm * self.local_aff[i][d];
+        }
+    }
+
+    pub(super) fn vec3(&self, c: usize, k: usize) -> Vec3 {
+        Vec3::new(self.dec[c][k], self.dec[c + 1][k], self.dec[c + 2][k])
+    }
+
+    pub(super) fn quat(&self, c: usize, k: usize) -> Quat {
+        let rot = self.layout.comps[c].rot;
+        let idx = self.layout.index[rot][k];
+        raw_rotation(
+            idx,
+            [self.dec[c][k], self.dec[c + 1][k], self.dec[c + 2][k]],
+        )
+    }
+
+    /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
+    /// the sampler computes it.
+    pub(super) fn sampled(&self, tr: usize, i: usize, mut base: Transform) -> Transform {
+        let (k0, k1, a) = self.at[i];
+        let [ft, fr, fs] = self.first[tr];
+        if a == 0.0 {
+            if let Some(c) = ft {
+                base.translation = self.vec3(c, k0);
+            }
+            if let Some(c) = fs {
+                base.scale = self.vec3(c, k0);
+            }
+            if let Some(c) = fr {
+                base.rotation = normalize_rotation(self.quat(c, k0));
+            }
+        } else {
+            if let Some(c) = ft {
+                base.translation = self.vec3(c, k0).lerp(self.vec3(c, k1), a);
+            }
+            if let Some(c) = fs {
+                base.scale = self.vec3(c, k0).lerp(self.vec3(c, k1), a);
+            }
+            if let Some(c) = fr {
+                base.rotation = nlerp(self.quat(c, k0), self.quat(c, k1), a);
+            }
+        }
+        base
+    }
+
+    pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
+        let m = &self.model[i][j];
+        let p = &self.ctx.rig.points[j];
+        let s = &self.ctx.src[i][j];
+        (0..3)
+            .map(|x| m.transform_point3(p[x]).distance(s[x]))
+            .fold(0.0f32, f32::max)
+    }
+
+    /// True when every joint is within its limit at every source time.
+    #[cfg(test)]
+    pub(super) fn within(&self) -> bool {
+        (0..self.at.len()).all(|i| {
+            (0..self.ctx.limits.len()).all(|j| self.joint_error(i, j) <= self.ctx.limits[j])
+        })
+    }
+
+    /// Sets component `c` of segment `s` to `bits` (tentatively: [`Eval::undo`] reverts it) and
+    /// returns the largest ratio of error to limit over the joints and times that changed. As soon
+    /// as one ratio exceeds `cap` it stops and returns infinity, leaving a state that only
+    /// [`Eval::undo`] may follow.
+    pub(super) fn set(&mut self, s: usize, c: usize, bits: u8, cap: f32) -> f32 {
+        let nc = self.layout.comps.len();
+        self.undo.comps.clear();
+        self.undo.key_rot.clear();
+        self.undo.poses.clear();
+        self.undo.bits = Some((s * nc + c, self.bits[s * nc + c]));
+        self.bits[s * nc + c] = bits;
+        self.params[s * nc + c] = self.layout.params(s, c, bits);
+        let j = self.joint[self.layout.comps[c].track];
+        let joints = std::mem::take(&mut self.subtree[j]);
+        self.requantize(s, &joints, Some(c), true);
+        let times = std::mem::take(&mut self.seg_times[s]);
+        let mut worst = 0.0f32;
+        'times: for &i in &times {
+            self.resample(i, &joints, true);
+            for &d in &joints {
+                if !self.moved[d] {
+                    continue;
+                }
+                let r = self.joint_error(i, d) / self.ctx.limits[d];
+                if exceeds(r, cap) {
+                    worst = f32::INFINITY;
+                    break 'times;
+                }
+                worst = worst.max(r);
+            }
+        }
+        self.seg_times[s] = times;
+        self.subtree[j] = joints;
+        worst
+    }
+
+    /// Reverts the last [`Eval::set`].
+    pub(super) fn undo(&mut self) {
+        if let Some((i, b)) = self.undo.bits.take() {
+            self.bits[i] = b;
+            let nc = self.layout.comps.len().max(1);
+            self.params[i] = self.layout.params(i / nc, i % nc, b);
+        }
+        for &(c, k, q, x) in self.undo.comps.iter().rev() {
+            self.qi[c][k] = q;
+            self.dec[c][k] = x;
+        }
+        for &(k, d, r) in self.undo.key_rot.iter().rev() {
+            self.key_rot[k][d] = r;
+        }
+        for &(i, d, l, a, m) in self.undo.poses.iter().rev() {
+            self.local[i][d] = l;
+            self.local_aff[i][d] = a;
+            self.model[i][d] = m;
+        }
+        self.undo.comps.clear();
+        self.undo.key_rot.clear();
+        self.undo.poses.clear();
+    }
+
+    /// The compressed clip of the current state.
+    pub(super) fn encode(&self, work: &Work) -> Option<Clip> {
+        self.layout
+            .encode(&self.bits, &self.qi, work, self.ctx.like)
+    }
+}

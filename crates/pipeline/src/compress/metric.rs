@@ -1,0 +1,298 @@
+//! The error metric: virtual points carried through the joint chain, measured against the source clip.
+
+use sinew_core::glam::{Affine3A, Vec3};
+use sinew_core::skeleton::inverse_bind_from_locals;
+use sinew_core::{Channel, Clip, ClipBinding, Sampler, Skeleton, Transform};
+
+/// The joints the error is measured on: the skeleton's, then one root per track it lacks.
+pub(super) struct Rig {
+    pub(super) skeleton: Skeleton,
+    /// Per joint: the local offsets of its three error points.
+    pub(super) points: Vec<[Vec3; 3]>,
+    /// Per joint: how far its error points and descendants reach from it in the bind pose.
+    pub(super) reach: Vec<f32>,
+    /// Per joint: how far its error points and its children reach from it in the bind pose (what
+    /// its rotation error moves once its children compensate it: see [`Eval`]).
+    pub(super) lever: Vec<f32>,
+    /// Per joint: the model-space scale of its parent (1 for roots).
+    pub(super) parent_scale: Vec<f32>,
+}
+
+pub(super) fn model_scale(a: &Affine3A) -> f32 {
+    let m = a.matrix3;
+    m.x_axis
+        .length()
+        .max(m.y_axis.length())
+        .max(m.z_axis.length())
+}
+
+pub(super) fn fk(parents: &[Option<u16>], local: &[Transform], out: &mut Vec<Affine3A>) {
+    out.clear();
+    for (j, t) in local.iter().enumerate() {
+        let a = t.to_affine();
+        let m = match parents.get(j).copied().flatten() {
+            Some(p) => out.get(p as usize).copied().unwrap_or(Affine3A::IDENTITY) * a,
+            None => a,
+        };
+        out.push(m);
+    }
+}
+
+/// The skeleton's extent: bind-pose bounding-box diagonal of the joint positions (1 when degenerate).
+pub fn skeleton_extent(skeleton: &Skeleton) -> f32 {
+    let mut m = Vec::new();
+    fk(skeleton.parents(), skeleton.bind_local(), &mut m);
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for a in &m {
+        let p = Vec3::from(a.translation);
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    let d = (hi - lo).length();
+    if d.is_finite() && d > 1e-6 {
+        d
+    } else {
+        1.0
+    }
+}
+
+pub(super) fn clip_extent(clip: &Clip) -> f32 {
+    let mut r: f32 = 0.0;
+    let p = clip.to_plain();
+    for t in p.tracks() {
+        if let Channel::Constant(v) = t.translation {
+            r = r.max(v.length());
+        }
+        if let Channel::Animated(o) = t.translation {
+            for f in p.frames().chunks_exact(p.stride().max(1)) {
+                let o = o as usize;
+                r = r.max(Vec3::new(f[o], f[o + 1], f[o + 2]).length());
+            }
+        }
+    }
+    if r.is_finite() && r > 1e-6 {
+        2.0 * r
+    } else {
+        1.0
+    }
+}
+
+impl Rig {
+    pub(super) fn new(clip: &Clip, skeleton: Option<&Skeleton>, distance: f32) -> Option<Rig> {
+        let (mut names, mut parents, mut bind) = match skeleton {
+            Some(s) => (
+                s.names().to_vec(),
+                s.parents().to_vec(),
+                s.bind_local().to_vec(),
+            ),
+            None => (Vec::new(), Vec::new(), Vec::new()),
+        };
+        for t in clip.tracks() {
+            if !names.contains(&t.joint) {
+                names.push(t.joint.clone());
+                parents.push(None);
+                bind.push(Transform::IDENTITY);
+            }
+        }
+        let inv = inverse_bind_from_locals(&parents, &bind);
+        let skeleton = Skeleton::new(names, parents.clone(), bind.clone(), inv).ok()?;
+        let mut m = Vec::new();
+        fk(&parents, &bind, &mut m);
+        let n = parents.len();
+        let scale: Vec<f32> = m.iter().map(|a| model_scale(a).max(1e-12)).collect();
+        let points = scale
+            .iter()
+            .map(|s| [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * (distance / s)))
+            .collect();
+        let mut reach = vec![distance; n];
+        let mut lever = vec![distance; n];
+        // Children come after parents: walk backwards, pushing reach up the chain.
+        for j in (0..n).rev() {
+            if let Some(p) = parents[j] {
+                let p = p as usize;
+                let d = (Vec3::from(m[j].translation) - Vec3::from(m[p].translation)).length();
+                reach[p] = reach[p].max(reach[j] + d);
+                lever[p] = lever[p].max(distance + d);
+            }
+        }
+        let parent_scale = parents
+            .iter()
+            .map(|p| p.map_or(1.0, |p| scale[p as usize]))
+            .collect();
+        Some(Rig {
+            skeleton,
+            points,
+            reach,
+            lever,
+            parent_scale,
+        })
+    }
+
+    /// Model-space error points of every joint for a local pose.
+    pub(super) fn points_of(
+        &self,
+        local: &[Transform],
+        m: &mut Vec<Affine3A>,
+        out: &mut Vec<[Vec3; 3]>,
+    ) {
+        fk(self.skeleton.parents(), local, m);
+        out.clear();
+        for (a, p) in m.iter().zip(&self.points) {
+            out.push(p.map(|x| a.transform_point3(x)));
+        }
+    }
+
+    /// Local poses of `clip` at each time (joints not driven keep their bind values).
+    pub(super) fn poses(&self, clip: &Clip, times: &[f32]) -> Vec<Vec<Transform>> {
+        let binding = ClipBinding::new(clip, &self.skeleton);
+        let mut sampler = Sampler::new();
+        let defaults: Vec<Transform> = if clip.additive() {
+            vec![Transform::IDENTITY; self.skeleton.len()]
+        } else {
+            self.skeleton.bind_local().to_vec()
+        };
+        times
+            .iter()
+            .map(|&t| {
+                let mut pose = defaults.clone();
+                // The output length matches the skeleton and the binding was made for it.
+                let _ = sampler.sample(clip, &binding, &self.skeleton, t, &mut pose);
+                pose
+            })
+            .collect()
+    }
+
+    /// Error points for each pose.
+    pub(super) fn all_points(&self, poses: &[Vec<Transform>]) -> Vec<Vec<[Vec3; 3]>> {
+        let mut m = Vec::new();
+        poses
+            .iter()
+            .map(|p| {
+                let mut out = Vec::new();
+                self.points_of(p, &mut m, &mut out);
+                out
+            })
+            .collect()
+    }
+}
+
+pub(super) fn point_error<'a>(
+    a: &'a [[Vec3; 3]],
+    b: &'a [[Vec3; 3]],
+) -> impl Iterator<Item = f32> + 'a {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (0..3).map(|i| p[i].distance(q[i])).fold(0.0f32, f32::max))
+}
+
+/// Errors (one per joint per key time of `source`, time-major) of `candidate` against `source`, by the
+/// metric of the module docs. Empty when the joints cannot form a skeleton (more than 65535).
+pub fn measure(
+    source: &Clip,
+    candidate: &Clip,
+    skeleton: Option<&Skeleton>,
+    error_distance: f32,
+) -> Vec<f32> {
+    let Some(rig) = Rig::new(source, skeleton, error_distance) else {
+        return Vec::new();
+    };
+    let times = source.times();
+    let a = rig.all_points(&rig.poses(source, times));
+    let b = rig.all_points(&rig.poses(candidate, times));
+    a.iter()
+        .zip(&b)
+        .flat_map(|(x, y)| point_error(x, y).collect::<Vec<_>>())
+        .collect()
+}
+
+pub(super) fn max_error_of(
+    src: &[Vec<[Vec3; 3]>],
+    rig: &Rig,
+    clip: &Clip,
+    times: &[f32],
+    limit: f32,
+) -> f32 {
+    let mut worst = 0.0f32;
+    runtime_points(rig, clip, times, |k, pts| {
+        for e in point_error(&src[k], pts) {
+            worst = worst.max(e);
+        }
+        worst > limit
+    });
+    worst
+}
+
+/// True when `clip`, sampled by the runtime at `times`, keeps every joint's error within its limit.
+pub(super) fn within(
+    src: &[Vec<[Vec3; 3]>],
+    rig: &Rig,
+    clip: &Clip,
+    times: &[f32],
+    limits: &[f32],
+) -> bool {
+    let mut ok = true;
+    runtime_points(rig, clip, times, |k, pts| {
+        ok = !point_error(&src[k], pts)
+            .zip(limits)
+            .any(|(e, &l)| exceeds(e, l));
+        !ok
+    });
+    ok
+}
+
+/// Samples `clip` with the runtime's sampler at each of `times` (over the bind pose, or the identity
+/// for an additive clip) and calls `stop` with the time's index and the rig's model-space points,
+/// until `stop` returns true.
+pub(super) fn runtime_points(
+    rig: &Rig,
+    clip: &Clip,
+    times: &[f32],
+    mut stop: impl FnMut(usize, &[[Vec3; 3]]) -> bool,
+) {
+    let binding = ClipBinding::new(clip, &rig.skeleton);
+    let mut sampler = Sampler::new();
+    let defaults: Vec<Transform> = if clip.additive() {
+        vec![Transform::IDENTITY; rig.skeleton.len()]
+    } else {
+        rig.skeleton.bind_local().to_vec()
+    };
+    let mut pose = defaults.clone();
+    let (mut m, mut pts) = (Vec::new(), Vec::new());
+    for (k, &t) in times.iter().enumerate() {
+        pose.copy_from_slice(&defaults);
+        let _ = sampler.sample(clip, &binding, &rig.skeleton, t, &mut pose);
+        rig.points_of(&pose, &mut m, &mut pts);
+        if stop(k, &pts) {
+            return;
+        }
+    }
+}
+
+/// True when `error` is above `limit` or not a number.
+pub(super) fn exceeds(error: f32, limit: f32) -> bool {
+    error.is_nan() || error > limit
+}
+
+/// How far f32 arithmetic alone may move a model-space point, per unit of its largest coordinate,
+/// as a multiple of `f32::EPSILON`: a one-ulp difference in a local rotation or translation, carried
+/// through a chain of parents, moves a point far from the origin by a few ulps of its coordinates
+/// (measured on the corpus: up to 4 ulps between the compiled clip and its source curves).
+pub(super) const NOISE_ULPS: f32 = 8.0;
+
+/// Per joint: the error the encoder allows, the tolerance less the f32 noise of the joint's error
+/// points ([`NOISE_ULPS`] x epsilon x their largest coordinate over the clip), so that the error
+/// measured against the source by another computation stays within the tolerance. At least half
+/// the tolerance.
+pub(super) fn joint_limits(src: &[Vec<[Vec3; 3]>], joints: usize, tolerance: f32) -> Vec<f32> {
+    let mut mag = vec![0.0f32; joints];
+    for key in src {
+        for (m, p) in mag.iter_mut().zip(key) {
+            for x in p {
+                *m = m.max(x.abs().max_element());
+            }
+        }
+    }
+    mag.iter()
+        .map(|m| (tolerance - NOISE_ULPS * f32::EPSILON * m).max(0.5 * tolerance))
+        .collect()
+}

@@ -1,0 +1,57 @@
+//! Error-bounded keyframe compression of clips (the encoder of [`sinew_core::compressed`]) and the
+//! error metric it is bounded by.
+//!
+//! # The error metric
+//!
+//! For every joint and every key time of the source clip, three points are attached rigidly to the
+//! joint, one along each of its local axes, `error_distance` model units away from it in the bind pose.
+//! Each point is carried to model space through the whole chain of parents, once with the source
+//! clip and once with the compressed clip; the error of that joint at that time is the largest of the
+//! three distances. Joints a clip does not drive take their bind values (so they move with their
+//! parents). Without a skeleton every track is a root of its own.
+//!
+//! # What the encoder does, in order
+//!
+//! 1. Channels that one value (their middle value, or the bind value when a skeleton is given and the
+//!    clip is not additive; the identity difference for additive clips) reproduces within a quarter of
+//!    the tolerance are stored as constants or not at all.
+//! 2. Keys that linear interpolation between their neighbours reproduces are dropped (whole keys, so
+//!    the runtime still reads one record per key: time-major), once for each key budget of
+//!    `KEY_BUDGETS` (fractions of the tolerance; the rest is left to quantization).
+//! 3. Every remaining animated channel is quantized: rotations as three components plus the 2-bit
+//!    index of the dropped one (the same index from key to key while that component stays large, so
+//!    the stored components do not jump), translations and scales as three components; each
+//!    component is range-reduced over the clip and over segments of keys. Rotations are quantized
+//!    with *chain compensation*: parents first, each joint storing the local rotation that, under its
+//!    parent's quantized rotation, gives its source model-space rotation, so orientation errors do not
+//!    accumulate down the chain (when every scale of the source poses is positive and uniform, so that
+//!    model-space rotations are products of local ones; otherwise, or if nothing meets the limits
+//!    with it, without compensation).
+//! 4. Bit widths, per component and segment: first the largest uniform error budget whose a-priori
+//!    widths measure within the limits, then one bit at a time off each component of each segment
+//!    for as long as the measured error (kept up to date incrementally) stays within the limits.
+//! 5. Steps 3 and 4 run for every set of kept keys from step 2 and several segment lengths (16, 32,
+//!    and for short clips 64 and lengths that split the clip into 1 to 4 equal segments); the few
+//!    smallest after the first widths get step 4's refinement, and the smallest result that the
+//!    runtime sampler measures within the limits is kept.
+//!
+//! The limits are per joint: the tolerance less a margin for f32 noise (a few ulps of the joint's
+//! model-space coordinates), so that an independent measurement against the source data also stays
+//! within the tolerance on models far from the origin.
+//!
+//! Key times are kept as the source has them (no resampling), so every source key is honoured in time.
+
+mod eval;
+mod metric;
+mod options;
+mod quantize;
+mod reduce;
+mod search;
+#[cfg(test)]
+mod tests;
+
+pub use metric::{measure, skeleton_extent};
+pub use options::{
+    ClipCompressionReport, CompressOptions, DEFAULT_RELATIVE_DISTANCE, DEFAULT_RELATIVE_TOLERANCE,
+};
+pub use search::compress_clip;

@@ -1,0 +1,83 @@
+//! Compression options, defaults and the per-clip report.
+
+/// Default tolerance as a fraction of the skeleton's extent (its bind-pose bounding-box diagonal):
+/// 0.0005, so 0.001 units on a 2-unit figure, 0.036 on a 72-unit Half-Life model.
+pub const DEFAULT_RELATIVE_TOLERANCE: f32 = 0.0005;
+/// Default error distance as a fraction of the skeleton's extent: 0.05 (0.1 units on a 2-unit figure).
+pub const DEFAULT_RELATIVE_DISTANCE: f32 = 0.05;
+/// How many of the candidate layouts (smallest first, with their first bit widths) are refined.
+pub(super) const DESCENDED: usize = 4;
+/// Clips with more source keys x joints than this refine only their best candidate layout (the
+/// refinement's cost grows with both).
+pub(super) const LARGE_CLIP: usize = 20_000;
+/// Clips with more kept keys than this try only segments of 16 and 32 keys.
+pub(super) const SHORT_CLIP: usize = 256;
+/// Key-reduction budgets tried for each clip, as fractions of the tolerance (the rest is left to
+/// quantization); the smallest result is kept.
+pub(super) const KEY_BUDGETS: [f32; 4] = [0.3, 0.5, 0.7, 0.85];
+
+/// Options of [`compress_clip`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct CompressOptions {
+    /// Largest allowed error, model units. `None`: [`DEFAULT_RELATIVE_TOLERANCE`] x the extent.
+    pub tolerance: Option<f32>,
+    /// Distance of the error points from their joint, model units. `None`:
+    /// [`DEFAULT_RELATIVE_DISTANCE`] x the extent.
+    pub error_distance: Option<f32>,
+    /// Drop keys that interpolation reproduces (step 2 of the module docs).
+    pub key_reduction: bool,
+}
+
+impl Default for CompressOptions {
+    fn default() -> Self {
+        Self {
+            tolerance: None,
+            error_distance: None,
+            key_reduction: true,
+        }
+    }
+}
+
+impl CompressOptions {
+    /// The peers' settings (ozz-animation, ACL): 0.001 units at 0.1 units.
+    pub fn peers() -> Self {
+        Self {
+            tolerance: Some(0.001),
+            error_distance: Some(0.1),
+            key_reduction: true,
+        }
+    }
+}
+
+/// What compressing one clip reached.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ClipCompressionReport {
+    /// Clip name.
+    pub clip: String,
+    /// Raw size: 40 bytes (10 f32: translation 3, rotation 4, scale 3) per animated joint per source key.
+    pub raw_bytes: usize,
+    /// Size of the plain (f32) clip record in the `.sinew` file.
+    pub plain_bytes: usize,
+    /// Size of the compressed clip record in the `.sinew` file (joint names excluded: string table).
+    pub compressed_bytes: usize,
+    /// `raw_bytes / compressed_bytes`.
+    pub ratio: f32,
+    /// Largest measured error over all joints and source key times, model units.
+    pub max_error: f32,
+    /// 99th percentile of the same errors.
+    pub p99_error: f32,
+    /// Tolerance used, model units.
+    pub tolerance: f32,
+    /// Error distance used, model units.
+    pub error_distance: f32,
+    /// Tracks with at least one animated channel in the source.
+    pub animated_joints: usize,
+    /// Source key count.
+    pub samples: usize,
+    /// Keys kept after key reduction.
+    pub kept_keys: usize,
+    /// `compressed_bytes / (animated_joints * samples)`.
+    pub bytes_per_joint_sample: f32,
+    /// False when the compressed form was not smaller and the plain clip was kept.
+    pub compressed: bool,
+}

@@ -1,0 +1,354 @@
+//! Quantisation: per-component ranges, segments, bit widths and the smallest-three rotation split.
+
+use super::metric::Rig;
+use super::reduce::{WChan, Work};
+use sinew_core::compressed::{
+    dequant_params, pack, smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
+};
+use sinew_core::glam::Quat;
+use sinew_core::Clip;
+
+/// Which channel of a track a component belongs to.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Kind {
+    T,
+    R,
+    S,
+}
+
+/// One quantized component: its values at the kept keys and where it comes from.
+pub(super) struct Comp {
+    pub(super) vals: Vec<f32>,
+    /// A-priori error per unit of value, model units (used for the first bit widths only).
+    pub(super) gain: f32,
+    pub(super) track: usize,
+    pub(super) kind: Kind,
+    pub(super) axis: usize,
+    /// For rotation components: the rotation's number (component order).
+    pub(super) rot: usize,
+}
+
+/// Smallest magnitude a dropped quaternion component may have: the largest of four unit components
+/// is at least 0.5, so dropping any component of at least this size rebuilds it no less precisely
+/// than dropping the largest could in the worst case.
+pub(super) const MIN_DROPPED: f32 = 0.5;
+
+/// Splits a rotation track into per-key (index, three components). The dropped component stays the
+/// same from key to key while its magnitude is at least [`MIN_DROPPED`] (switching to the largest
+/// otherwise), so the stored components do not jump where two components trade places as the
+/// largest; of the four possible first indices (and the plain largest-per-key split) the one whose
+/// component ranges are narrowest (sum of log2 of the ranges) is kept.
+pub(super) fn split_rotations(v: &[Quat]) -> Vec<(u8, [f32; 3])> {
+    let largest: Vec<(u8, [f32; 3])> = v.iter().map(|q| smallest_three(*q)).collect();
+    let cost = |s: &[(u8, [f32; 3])]| -> f32 {
+        (0..3)
+            .map(|i| {
+                let lo = s.iter().map(|x| x.1[i]).fold(f32::MAX, f32::min);
+                let hi = s.iter().map(|x| x.1[i]).fold(f32::MIN, f32::max);
+                ((hi - lo).max(0.0) + 1e-6).log2()
+            })
+            .sum()
+    };
+    let mut best_cost = cost(&largest);
+    let mut best = largest;
+    for start in 0..4u8 {
+        let mut cur = start;
+        let mut out = Vec::with_capacity(v.len());
+        for q in v {
+            if q.to_array()[usize::from(cur)].abs() < MIN_DROPPED {
+                cur = smallest_three(*q).0;
+            }
+            out.push((cur, three_without(*q, cur)));
+        }
+        let c = cost(&out);
+        if c < best_cost {
+            best_cost = c;
+            best = out;
+        }
+    }
+    best
+}
+
+/// Step 3's fixed part for one set of kept keys and one segment length: components, clip ranges
+/// and segment sub-ranges. The bit widths and stored integers are chosen by [`Eval`].
+pub(super) struct Layout {
+    pub(super) keys: usize,
+    pub(super) seg_len: usize,
+    pub(super) seg_count: usize,
+    pub(super) comps: Vec<Comp>,
+    pub(super) starts: Vec<bool>,
+    /// Per rotation, per key: the index of the dropped quaternion component.
+    pub(super) index: Vec<Vec<u8>>,
+    pub(super) ranges: Vec<[f32; 2]>,
+    /// Per segment, per component (segment-major): the sub-range (`bits` is set later).
+    pub(super) sub: Vec<SegmentComponent>,
+}
+
+/// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`.
+#[derive(Clone, Copy)]
+pub(super) struct Quant {
+    pub(super) scale: f32,
+    pub(super) bias: f32,
+    pub(super) top: u32,
+}
+
+impl Quant {
+    /// The stored integer nearest to `v` and the value it decodes to (as the decoder computes it).
+    pub(super) fn quantize(self, v: f32) -> (u32, f32) {
+        // Round to nearest (halves up) by truncation, which needs no libm call.
+        let y = if self.scale > 0.0 {
+            (v - self.bias) / self.scale
+        } else {
+            0.0
+        };
+        let q = if y > 0.0 {
+            ((y + 0.5) as u32).min(self.top)
+        } else {
+            0
+        };
+        (q, self.bias + self.scale * q as f32)
+    }
+}
+
+/// The segment sub-range of values `keys` inside the clip range `lo .. lo + ext`: the 8-bit
+/// fractions `min` and `extent` whose decoded range covers every value.
+pub(super) fn sub_range(range: [f32; 2], keys: &[f32]) -> SegmentComponent {
+    let [lo, ext] = range;
+    let mut e = SegmentComponent::default();
+    if ext <= 0.0 || keys.is_empty() {
+        return e;
+    }
+    let smin = keys.iter().copied().fold(f32::MAX, f32::min);
+    let smax = keys.iter().copied().fold(f32::MIN, f32::max);
+    let a = (((smin - lo) / ext) * 255.0).floor().clamp(0.0, 255.0) as u8;
+    e.min = a;
+    let mut b = ((((smax - lo) / ext) * 255.0).ceil() as i32 - i32::from(a)).clamp(0, 255);
+    loop {
+        e.extent = b as u8;
+        let (_, seg_lo) = dequant_params(range, SegmentComponent { bits: 1, ..e });
+        let seg_ext = ext * (f32::from(e.extent) / 255.0);
+        if seg_lo + seg_ext >= smax || b >= 255 - i32::from(a) {
+            break;
+        }
+        b += 1;
+    }
+    e
+}
+
+impl Layout {
+    pub(super) fn new(work: &Work, rig: &Rig, seg_len: usize, compensate: bool) -> Layout {
+        let n = work.times.len();
+        let seg_len = seg_len.clamp(1, n.max(1));
+        let mut comps: Vec<Comp> = Vec::new();
+        let mut starts: Vec<bool> = Vec::new();
+        let mut index: Vec<Vec<u8>> = Vec::new();
+        for (track, t) in work.tracks.iter().enumerate() {
+            let j = rig.skeleton.find(&t.joint).map_or(0, usize::from);
+            let reach = rig.reach.get(j).copied().unwrap_or(1.0);
+            let lever = if compensate {
+                rig.lever.get(j).copied().unwrap_or(1.0)
+            } else {
+                reach
+            };
+            let ps = rig.parent_scale.get(j).copied().unwrap_or(1.0);
+            let mut push = |vals: Vec<f32>, gain: f32, kind: Kind, axis: usize, rot: usize| {
+                comps.push(Comp {
+                    vals,
+                    gain,
+                    track,
+                    kind,
+                    axis,
+                    rot,
+                });
+                starts.push(kind == Kind::R && axis == 0);
+            };
+            if let WChan::Keys(v) = &t.t {
+                for i in 0..3 {
+                    push(v.iter().map(|x| x[i]).collect(), ps * 1.8, Kind::T, i, 0);
+                }
+            }
+            if let WChan::Keys(v) = &t.r {
+                let split = split_rotations(v);
+                index.push(split.iter().map(|s| s.0).collect());
+                let rot = index.len() - 1;
+                for i in 0..3 {
+                    let vals = split.iter().map(|s| s.1[i]).collect();
+                    push(vals, 4.0 * lever, Kind::R, i, rot);
+                }
+            }
+            if let WChan::Keys(v) = &t.s {
+                for i in 0..3 {
+                    push(
+                        v.iter().map(|x| x[i]).collect(),
+                        ps * reach * 1.8,
+                        Kind::S,
+                        i,
+                        0,
+                    );
+                }
+            }
+        }
+        let nc = comps.len();
+        let seg_count = n.div_ceil(seg_len);
+        let ranges: Vec<[f32; 2]> = comps
+            .iter()
+            .map(|c| {
+                let lo = c.vals.iter().copied().fold(f32::MAX, f32::min);
+                let hi = c.vals.iter().copied().fold(f32::MIN, f32::max);
+                if n == 0 {
+                    [0.0, 0.0]
+                } else {
+                    [lo, (hi - lo).max(0.0)]
+                }
+            })
+            .collect();
+        let mut sub = vec![SegmentComponent::default(); seg_count * nc];
+        for s in 0..seg_count {
+            let keys = s * seg_len..((s + 1) * seg_len).min(n);
+            for (c, comp) in comps.iter().enumerate() {
+                sub[s * nc + c] = sub_range(ranges[c], &comp.vals[keys.clone()]);
+            }
+        }
+        Layout {
+            keys: n,
+            seg_len,
+            seg_count,
+            comps,
+            starts,
+            index,
+            ranges,
+            sub,
+        }
+    }
+
+    pub(super) fn seg_keys(&self, s: usize) -> std::ops::Range<usize> {
+        s * self.seg_len..((s + 1) * self.seg_len).min(self.keys)
+    }
+
+    /// The quantization parameters of component `c` in segment `s` at `bits`.
+    pub(super) fn params(&self, s: usize, c: usize, bits: u8) -> Quant {
+        let e = SegmentComponent {
+            bits,
+            ..self.sub[s * self.comps.len() + c]
+        };
+        let (scale, bias) = dequant_params(self.ranges[c], e);
+        Quant {
+            scale,
+            bias,
+            top: ((1u64 << bits) - 1) as u32,
+        }
+    }
+
+    /// First bit widths (per segment, per component): the fewest whose a-priori error bound
+    /// (`gain` x half a quantization step) stays within `budget` model units.
+    pub(super) fn first_bits(&self, budget: f32) -> Vec<u8> {
+        let nc = self.comps.len();
+        let mut bits = vec![0u8; self.sub.len()];
+        for (i, e) in self.sub.iter().enumerate() {
+            let c = i % nc.max(1);
+            let allowed = budget / self.comps[c].gain.max(1e-12);
+            let seg_ext = self.ranges[c][1] * (f32::from(e.extent) / 255.0);
+            let mut b = 0u8;
+            while b < MAX_BITS {
+                let err = if b == 0 {
+                    seg_ext * 0.5
+                } else {
+                    seg_ext / ((1u32 << b) - 1) as f32 * 0.5
+                };
+                if err <= allowed {
+                    break;
+                }
+                b += 1;
+            }
+            bits[i] = b;
+        }
+        bits
+    }
+
+    /// The compressed clip with these bit widths and stored integers (per component, per key).
+    pub(super) fn encode(
+        &self,
+        bits: &[u8],
+        qi: &[Vec<u32>],
+        work: &Work,
+        like: &Clip,
+    ) -> Option<Clip> {
+        let n = self.keys;
+        let nc = self.comps.len();
+        let mut segments = self.sub.clone();
+        for (e, &b) in segments.iter_mut().zip(bits) {
+            e.bits = b;
+        }
+        let mut q = vec![0u32; n * nc];
+        for (c, list) in qi.iter().enumerate() {
+            for (k, &x) in list.iter().enumerate() {
+                q[k * nc + c] = x;
+            }
+        }
+        let rotations = self.index.len();
+        let mut idx = vec![0u8; n * rotations];
+        for (r, list) in self.index.iter().enumerate() {
+            for (k, &i) in list.iter().enumerate() {
+                idx[k * rotations + r] = i;
+            }
+        }
+        let data = pack(n, self.seg_len, &segments, &self.starts, &q, &idx);
+        let (tracks, _) = work.clip_tracks(3);
+        Clip::from_quantized(
+            like.name().to_owned(),
+            like.duration(),
+            like.sample_rate(),
+            like.looping(),
+            like.additive(),
+            work.times.clone(),
+            tracks,
+            QuantizedParts {
+                segment_len: self.seg_len as u32,
+                ranges: self.ranges.clone(),
+                segments,
+                data,
+            },
+        )
+        .ok()
+    }
+}
+
+/// The rotation the decoder rebuilds from a smallest-three split, before normalisation (the same
+/// arithmetic as `sinew_core::compressed`).
+pub(super) fn raw_rotation(index: u8, v: [f32; 3]) -> Quat {
+    const PERM: [[usize; 4]; 4] = [[3, 0, 1, 2], [0, 3, 1, 2], [0, 1, 3, 2], [0, 1, 2, 3]];
+    let w = (1.0 - v[0] * v[0] - v[1] * v[1] - v[2] * v[2])
+        .max(0.0)
+        .sqrt();
+    let src = [v[0], v[1], v[2], w];
+    let p = PERM[usize::from(index & 3)];
+    Quat::from_xyzw(src[p[0]], src[p[1]], src[p[2]], src[p[3]])
+}
+
+/// Where the sampler reads a clip with these key times at time `t`: `(k0, k1, alpha)`, as
+/// [`Clip::local_time`] and [`Sampler::locate`] compute it.
+pub(super) fn locate(like: &Clip, times: &[f32], t: f32) -> (usize, usize, f32) {
+    let t = like.local_time(t);
+    let n = times.len();
+    if n <= 1 || t <= times[0] {
+        if like.looping() && n > 1 && t < times[0] {
+            let span = times[0] + (like.duration() - times[n - 1]);
+            if span > 0.0 {
+                let a = (t + like.duration() - times[n - 1]) / span;
+                return (n - 1, 0, a.clamp(0.0, 1.0));
+            }
+        }
+        return (0, 0, 0.0);
+    }
+    let c = times.partition_point(|&x| x <= t).saturating_sub(1);
+    if c + 1 >= n {
+        if like.looping() {
+            let span = like.duration() - times[c] + times[0];
+            if span > 0.0 {
+                return (c, 0, ((t - times[c]) / span).clamp(0.0, 1.0));
+            }
+        }
+        return (c, c, 0.0);
+    }
+    (c, c + 1, (t - times[c]) / (times[c + 1] - times[c]))
+}

@@ -1,0 +1,298 @@
+//! Key reduction: constant channels and keys that interpolation reproduces are dropped.
+
+use super::metric::{max_error_of, point_error, Rig};
+use sinew_core::clip::nlerp;
+use sinew_core::glam::{Quat, Vec3};
+use sinew_core::{Channel, Clip, Track, Transform};
+
+/// A clip's channel values per key, ready to rebuild clips from.
+#[derive(Clone)]
+pub(super) struct Work {
+    pub(super) times: Vec<f32>,
+    pub(super) tracks: Vec<WTrack>,
+}
+
+#[derive(Clone)]
+pub(super) struct WTrack {
+    pub(super) joint: String,
+    pub(super) t: WChan<Vec3>,
+    pub(super) r: WChan<Quat>,
+    pub(super) s: WChan<Vec3>,
+}
+
+#[derive(Clone)]
+pub(super) enum WChan<T> {
+    Bind,
+    Constant(T),
+    Keys(Vec<T>),
+}
+
+impl<T: Copy> WChan<T> {
+    pub(super) fn channel(&self, o: &mut u32, n: u32) -> Channel<T> {
+        match self {
+            WChan::Bind => Channel::Bind,
+            WChan::Constant(v) => Channel::Constant(*v),
+            WChan::Keys(_) => {
+                *o += n;
+                Channel::Animated(*o - n)
+            }
+        }
+    }
+}
+
+impl Work {
+    pub(super) fn from_plain(p: &Clip) -> Work {
+        let stride = p.stride().max(1);
+        let frames: Vec<&[f32]> = p.frames().chunks_exact(stride).collect();
+        let v3 = |c: Channel<Vec3>| match c {
+            Channel::Bind => WChan::Bind,
+            Channel::Constant(v) => WChan::Constant(v),
+            Channel::Animated(o) => {
+                let o = o as usize;
+                WChan::Keys(
+                    frames
+                        .iter()
+                        .map(|f| Vec3::from_slice(&f[o..o + 3]))
+                        .collect(),
+                )
+            }
+        };
+        let tracks = p
+            .tracks()
+            .iter()
+            .map(|t| WTrack {
+                joint: t.joint.clone(),
+                t: v3(t.translation),
+                r: match t.rotation {
+                    Channel::Bind => WChan::Bind,
+                    Channel::Constant(q) => WChan::Constant(q),
+                    Channel::Animated(o) => {
+                        let o = o as usize;
+                        WChan::Keys(
+                            frames
+                                .iter()
+                                .map(|f| Quat::from_slice(&f[o..o + 4]))
+                                .collect(),
+                        )
+                    }
+                },
+                s: v3(t.scale),
+            })
+            .collect();
+        Work {
+            times: p.times().to_vec(),
+            tracks,
+        }
+    }
+
+    /// The clip tracks of these values, with animated channels numbered in track order, and the
+    /// number of animated components: a rotation stores `rotation_components` (4 as plain floats, 3
+    /// quantized).
+    pub(super) fn clip_tracks(&self, rotation_components: u32) -> (Vec<Track>, u32) {
+        let mut o = 0;
+        let tracks = self
+            .tracks
+            .iter()
+            .map(|t| Track {
+                joint: t.joint.clone(),
+                translation: t.t.channel(&mut o, 3),
+                rotation: t.r.channel(&mut o, rotation_components),
+                scale: t.s.channel(&mut o, 3),
+            })
+            .collect();
+        (tracks, o)
+    }
+
+    /// A plain clip with these values.
+    pub(super) fn plain(&self, like: &Clip) -> Option<Clip> {
+        let (tracks, o) = self.clip_tracks(4);
+        let mut frames = Vec::with_capacity(o as usize * self.times.len());
+        for k in 0..self.times.len() {
+            for t in &self.tracks {
+                if let WChan::Keys(v) = &t.t {
+                    frames.extend_from_slice(&v[k].to_array());
+                }
+                if let WChan::Keys(v) = &t.r {
+                    frames.extend_from_slice(&v[k].to_array());
+                }
+                if let WChan::Keys(v) = &t.s {
+                    frames.extend_from_slice(&v[k].to_array());
+                }
+            }
+        }
+        Clip::from_parts(
+            like.name().to_owned(),
+            like.duration(),
+            like.sample_rate(),
+            like.looping(),
+            like.additive(),
+            self.times.clone(),
+            tracks,
+            o as usize,
+            frames,
+        )
+        .ok()
+    }
+
+    pub(super) fn keep(&mut self, keys: &[usize]) {
+        self.times = keys.iter().map(|&k| self.times[k]).collect();
+        for t in &mut self.tracks {
+            if let WChan::Keys(v) = &mut t.t {
+                *v = keys.iter().map(|&k| v[k]).collect();
+            }
+            if let WChan::Keys(v) = &mut t.r {
+                *v = keys.iter().map(|&k| v[k]).collect();
+            }
+            if let WChan::Keys(v) = &mut t.s {
+                *v = keys.iter().map(|&k| v[k]).collect();
+            }
+        }
+    }
+}
+
+pub(super) fn mid3(v: &[Vec3]) -> Vec3 {
+    let (lo, hi) = v.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(a, b), x| (a.min(*x), b.max(*x)),
+    );
+    (lo + hi) * 0.5
+}
+
+pub(super) fn mean_quat(v: &[Quat]) -> Quat {
+    let first = v.first().copied().unwrap_or(Quat::IDENTITY);
+    let mut acc = Quat::from_xyzw(0.0, 0.0, 0.0, 0.0);
+    for q in v {
+        acc += if q.dot(first) < 0.0 { -*q } else { *q };
+    }
+    if acc.length() > 1e-6 {
+        acc.normalize()
+    } else {
+        first
+    }
+}
+
+/// Step 1: channels that one value reproduces become constants or bind.
+pub(super) fn simplify_channels(
+    work: &mut Work,
+    like: &Clip,
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    src_times: &[f32],
+    budget: f32,
+    bind_allowed: bool,
+) {
+    let defaults: Vec<Option<Transform>> = work
+        .tracks
+        .iter()
+        .map(|t| {
+            if like.additive() {
+                Some(Transform::IDENTITY)
+            } else if bind_allowed {
+                rig.skeleton
+                    .find(&t.joint)
+                    .map(|j| rig.skeleton.bind_local()[j as usize])
+            } else {
+                None
+            }
+        })
+        .collect();
+    #[allow(clippy::needless_range_loop)] // `work` is replaced inside the loop
+    for i in 0..work.tracks.len() {
+        for ch in 0..3 {
+            let mut candidates: Vec<Work> = Vec::new();
+            let tr = &work.tracks[i];
+            let mut with = |f: &dyn Fn(&mut WTrack)| {
+                let mut w = work.clone();
+                f(&mut w.tracks[i]);
+                candidates.push(w);
+            };
+            let d = defaults[i];
+            match ch {
+                0 => {
+                    if let WChan::Keys(v) = &tr.t {
+                        if d.is_some() {
+                            with(&|t: &mut WTrack| t.t = WChan::Bind);
+                        }
+                        let c = mid3(v);
+                        with(&move |t: &mut WTrack| t.t = WChan::Constant(c));
+                    }
+                }
+                1 => {
+                    if let WChan::Keys(v) = &tr.r {
+                        if d.is_some() {
+                            with(&|t: &mut WTrack| t.r = WChan::Bind);
+                        }
+                        let c = mean_quat(v);
+                        with(&move |t: &mut WTrack| t.r = WChan::Constant(c));
+                    }
+                }
+                _ => {
+                    if let WChan::Keys(v) = &tr.s {
+                        if d.is_some() {
+                            with(&|t: &mut WTrack| t.s = WChan::Bind);
+                        }
+                        let c = mid3(v);
+                        with(&move |t: &mut WTrack| t.s = WChan::Constant(c));
+                    }
+                }
+            }
+            for w in candidates {
+                let Some(c) = w.plain(like) else { continue };
+                if max_error_of(src, rig, &c, src_times, budget) <= budget {
+                    *work = w;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Step 2: greedy key reduction. Returns the kept key indices.
+pub(super) fn reduce_keys(
+    work: &Work,
+    like: &Clip,
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    budget: f32,
+) -> Vec<usize> {
+    let n = work.times.len();
+    if n <= 2 {
+        return (0..n).collect();
+    }
+    let Some(plain) = work.plain(like) else {
+        return (0..n).collect();
+    };
+    let poses = rig.poses(&plain, &work.times);
+    let (mut m, mut pts) = (Vec::new(), Vec::new());
+    let mut lerped = poses[0].clone();
+    let mut ok = |a: usize, b: usize| -> bool {
+        let (ta, tb) = (work.times[a], work.times[b]);
+        for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
+            let x = (work.times[k] - ta) / (tb - ta);
+            for (j, out) in lerped.iter_mut().enumerate() {
+                let (p, q) = (poses[a][j], poses[b][j]);
+                *out = Transform {
+                    translation: p.translation.lerp(q.translation, x),
+                    rotation: nlerp(p.rotation, q.rotation, x),
+                    scale: p.scale.lerp(q.scale, x),
+                };
+            }
+            rig.points_of(&lerped, &mut m, &mut pts);
+            if point_error(src_k, &pts).any(|e| e > budget) {
+                return false;
+            }
+        }
+        true
+    };
+    let mut kept = vec![0];
+    let mut a = 0;
+    while a + 1 < n {
+        let mut b = a + 1;
+        while b + 1 < n && b + 1 - a <= 128 && ok(a, b + 1) {
+            b += 1;
+        }
+        kept.push(b);
+        a = b;
+    }
+    kept
+}

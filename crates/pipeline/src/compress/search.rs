@@ -1,0 +1,292 @@
+//! The per-clip search over key budgets, segment lengths and bit widths, and the entry point.
+
+use super::eval::{Ctx, Eval};
+use super::metric::{clip_extent, measure, skeleton_extent, within, Rig};
+use super::options::{
+    ClipCompressionReport, CompressOptions, DEFAULT_RELATIVE_DISTANCE, DEFAULT_RELATIVE_TOLERANCE,
+    DESCENDED, KEY_BUDGETS, LARGE_CLIP, SHORT_CLIP,
+};
+use super::quantize::Layout;
+use super::reduce::{reduce_keys, simplify_channels, Work};
+use sinew_core::format::clip_record_size;
+use sinew_core::{Channel, Clip, Skeleton};
+
+/// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
+/// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
+/// returns the budget and the widths.
+pub(super) fn first_state(
+    ctx: &Ctx,
+    layout: &Layout,
+    work: &Work,
+    start: f32,
+    compensate: bool,
+) -> Option<(f32, Vec<u8>)> {
+    let passes = |budget: f32| {
+        let bits = layout.first_bits(budget);
+        Eval::build(ctx, layout, work, bits.clone(), compensate, true)
+            .1
+            .then_some(bits)
+    };
+    let step = std::f32::consts::SQRT_2;
+    let mut budget = start;
+    let mut found = passes(budget);
+    if found.is_some() {
+        for _ in 0..16 {
+            match passes(budget * step) {
+                Some(f) => {
+                    budget *= step;
+                    found = Some(f);
+                }
+                None => break,
+            }
+        }
+    } else {
+        for _ in 0..40 {
+            budget /= step;
+            found = passes(budget);
+            if found.is_some() {
+                break;
+            }
+        }
+    }
+    found.map(|bits| (budget, bits))
+}
+
+/// Step 3, second part: rounds of one-bit reductions over every component of every segment. A
+/// reduction is kept when the error it gives, as a fraction of the limit, is within the round's
+/// threshold; thresholds rise over the first rounds ([`THRESHOLDS`]) so that the cheapest
+/// reductions are taken first, then stay at 1 until no reduction is kept. A reduction that fails
+/// at threshold 1 is not tried again (errors only grow as other widths shrink).
+pub(super) fn descend(eval: &mut Eval) {
+    let nc = eval.layout.comps.len();
+    let segs = eval.layout.seg_count;
+    let mut blocked = vec![false; nc * segs];
+    let mut round = 0;
+    loop {
+        let limit = THRESHOLDS.get(round).copied().unwrap_or(1.0);
+        round += 1;
+        let mut changed = false;
+        for c in 0..nc {
+            for s in 0..segs {
+                let i = s * nc + c;
+                let b = eval.bits[i];
+                if b == 0 || blocked[i] {
+                    continue;
+                }
+                if eval.set(s, c, b - 1, limit) <= limit {
+                    changed = true;
+                } else {
+                    eval.undo();
+                    blocked[i] = limit >= 1.0;
+                }
+            }
+        }
+        if !changed && round >= THRESHOLDS.len() {
+            break;
+        }
+    }
+}
+
+/// The thresholds of the first rounds of [`descend`] (fractions of the joints' limits).
+pub(super) const THRESHOLDS: [f32; 4] = [0.5, 0.7, 0.85, 0.95];
+
+/// Segment lengths tried for `n` keys: 16 and 32; up to [`SHORT_CLIP`] keys also 64 and the lengths
+/// that split the keys into 1 to 4 segments of (nearly) equal size (segment headers weigh on short
+/// clips; on long ones short segments follow the motion best).
+pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
+    let n = n.max(1);
+    let short = n <= SHORT_CLIP;
+    let mut out: Vec<usize> = [16, 32]
+        .into_iter()
+        .chain(short.then_some(64))
+        .chain((1..=4).filter(|_| short).map(|k| n.div_ceil(k)))
+        .map(|l| l.clamp(1, n))
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// Steps 1 to 5 of the module docs; `None` when nothing met the limits.
+///
+/// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) and every segment length
+/// of [`segment_candidates`] is quantized with its first bit widths; the [`DESCENDED`] smallest of
+/// those (one for clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result
+/// is kept (the first of equals). `compensate`: quantize rotations with chain compensation (only
+/// when every scale of the source poses is positive and uniform).
+pub(super) fn compress_work(
+    work: &mut Work,
+    source: &Clip,
+    rig: &Rig,
+    tolerance: f32,
+    bind_allowed: bool,
+    options: &CompressOptions,
+    compensate: bool,
+) -> Option<Clip> {
+    if work.times.is_empty() {
+        return None;
+    }
+    let times = source.times();
+    let ctx = Ctx::new(rig, source, times, tolerance);
+    let compensate = compensate && ctx.uniform;
+    let src = &ctx.src;
+    simplify_channels(
+        work,
+        source,
+        rig,
+        src,
+        times,
+        tolerance * 0.25,
+        bind_allowed,
+    );
+    let base = work.clone();
+    let mut kept_sets: Vec<Vec<usize>> = Vec::new();
+    let mut works: Vec<Work> = Vec::new();
+    if options.key_reduction {
+        for &frac in &KEY_BUDGETS {
+            let kept = reduce_keys(&base, source, rig, src, tolerance * frac);
+            if !kept_sets.contains(&kept) {
+                let mut w = base.clone();
+                w.keep(&kept);
+                works.push(w);
+                kept_sets.push(kept);
+            }
+        }
+    } else {
+        works.push(base);
+    }
+    let layouts: Vec<(usize, Layout)> = works
+        .iter()
+        .enumerate()
+        .flat_map(|(wi, w)| {
+            segment_candidates(w.times.len())
+                .into_iter()
+                .map(move |l| (wi, Layout::new(w, rig, l, compensate)))
+        })
+        .collect();
+    // (size with the first bit widths, layout, bit widths)
+    let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
+    let mut start = tolerance;
+    for (li, (wi, layout)) in layouts.iter().enumerate() {
+        let w = &works[*wi];
+        let Some((budget, bits)) = first_state(&ctx, layout, w, start, compensate) else {
+            continue;
+        };
+        start = budget;
+        let qi = Eval::new(&ctx, layout, w, bits.clone(), compensate).qi;
+        let Some(c) = layout.encode(&bits, &qi, w, source) else {
+            continue;
+        };
+        firsts.push((clip_record_size(&c), li, bits));
+    }
+    firsts.sort_by_key(|f| (f.0, f.1));
+    let volume = times.len() * rig.skeleton.len();
+    let descended = if volume <= LARGE_CLIP { DESCENDED } else { 1 };
+    let mut best: Option<(usize, Clip)> = None;
+    for (_, li, bits) in firsts.into_iter().take(descended) {
+        let (wi, layout) = &layouts[li];
+        let w = &works[*wi];
+        let mut e = Eval::new(&ctx, layout, w, bits, compensate);
+        let before = e.encode(w);
+        descend(&mut e);
+        for c in [e.encode(w), before].into_iter().flatten() {
+            if !within(src, rig, &c, times, &ctx.limits) {
+                continue;
+            }
+            let size = clip_record_size(&c);
+            if best.as_ref().is_none_or(|b| size < b.0) {
+                best = Some((size, c));
+            }
+            break;
+        }
+    }
+    best.map(|b| b.1)
+}
+
+pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
+    if errors.is_empty() {
+        return 0.0;
+    }
+    errors.sort_by(f32::total_cmp);
+    let i = ((errors.len() as f32 * p).ceil() as usize).clamp(1, errors.len()) - 1;
+    errors[i]
+}
+
+/// Compresses one clip within the tolerance (see the module docs) and reports what it reached.
+///
+/// `skeleton` gives the joint hierarchy for the error metric, the bind values for bind elision and the
+/// extent for the default tolerance; without it every track is its own root and no channel is elided
+/// to the bind value (except identity differences of an additive clip). When the compressed clip
+/// would not be smaller than the plain one, the plain clip is returned (`report.compressed == false`).
+pub fn compress_clip(
+    clip: &Clip,
+    skeleton: Option<&Skeleton>,
+    options: &CompressOptions,
+) -> (Clip, ClipCompressionReport) {
+    let source = clip.to_plain();
+    let extent = skeleton.map_or_else(|| clip_extent(&source), skeleton_extent);
+    let tolerance = options
+        .tolerance
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .unwrap_or(DEFAULT_RELATIVE_TOLERANCE * extent);
+    let distance = options
+        .error_distance
+        .filter(|t| t.is_finite() && *t >= 0.0)
+        .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
+    let rig = Rig::new(&source, skeleton, distance);
+    let work = Work::from_plain(&source);
+    let mut best: Option<Clip> = None;
+    if let Some(rig) = rig {
+        for compensate in [true, false] {
+            best = compress_work(
+                &mut work.clone(),
+                &source,
+                &rig,
+                tolerance,
+                skeleton.is_some(),
+                options,
+                compensate,
+            );
+            if best.is_some() {
+                break;
+            }
+        }
+    }
+    let plain_bytes = clip_record_size(&source);
+    let mut out = best.unwrap_or_else(|| source.clone());
+    if clip_record_size(&out) >= plain_bytes {
+        out = source.clone();
+    }
+    let compressed_bytes = clip_record_size(&out);
+    let mut errors = measure(&source, &out, skeleton, distance);
+    let max_error = errors.iter().copied().fold(0.0, f32::max);
+    let p99_error = percentile(&mut errors, 0.99);
+    let animated_joints = source
+        .tracks()
+        .iter()
+        .filter(|t| {
+            matches!(t.translation, Channel::Animated(_))
+                || matches!(t.rotation, Channel::Animated(_))
+                || matches!(t.scale, Channel::Animated(_))
+        })
+        .count();
+    let samples = source.times().len();
+    let raw_bytes = 40 * animated_joints * samples;
+    let report = ClipCompressionReport {
+        clip: clip.name().to_owned(),
+        raw_bytes,
+        plain_bytes,
+        compressed_bytes,
+        ratio: raw_bytes as f32 / compressed_bytes.max(1) as f32,
+        max_error,
+        p99_error,
+        tolerance,
+        error_distance: distance,
+        animated_joints,
+        samples,
+        kept_keys: out.times().len(),
+        bytes_per_joint_sample: compressed_bytes as f32 / (animated_joints * samples).max(1) as f32,
+        compressed: out.is_compressed(),
+    };
+    (out, report)
+}

@@ -1,0 +1,173 @@
+//! Unit tests of clip compression.
+
+#![allow(clippy::unwrap_used)]
+use super::eval::*;
+use super::metric::*;
+use super::options::*;
+use super::quantize::*;
+use super::reduce::*;
+use super::search::*;
+use sinew_core::compressed::smallest_three;
+use sinew_core::format::clip_record_size;
+use sinew_core::glam::{Quat, Vec3};
+use sinew_core::{Clip, Skeleton, Transform};
+
+use sinew_core::{Curve, JointDesc, TrackCurves};
+
+/// A chain of `n` joints, `bone` units apart along y.
+fn chain(n: usize, bone: f32) -> Skeleton {
+    let joints = (0..n)
+        .map(|i| JointDesc {
+            name: format!("j{i}"),
+            parent: i.checked_sub(1).map(|p| format!("j{p}")),
+            bind_local: Transform::from_translation(Vec3::Y * if i == 0 { 0.0 } else { bone }),
+            inverse_bind: None,
+        })
+        .collect();
+    Skeleton::from_unordered(joints).unwrap().0
+}
+
+/// Every joint of `skeleton` swinging about a different axis, `keys` keys at 30 Hz.
+fn swing(skeleton: &Skeleton, keys: usize) -> Clip {
+    let times: Vec<f32> = (0..keys).map(|k| k as f32 / 30.0).collect();
+    let tracks = skeleton
+        .names()
+        .iter()
+        .enumerate()
+        .map(|(j, name)| {
+            let axis = Vec3::new(1.0, j as f32 * 0.37, 0.5 - j as f32 * 0.11).normalize();
+            let rotation = times
+                .iter()
+                .map(|t| Quat::from_axis_angle(axis, 0.6 * (t * (2.0 + j as f32 * 0.7)).sin()))
+                .collect();
+            TrackCurves {
+                joint: name.clone(),
+                rotation: Curve::new(times.clone(), rotation),
+                ..Default::default()
+            }
+        })
+        .collect();
+    Clip::from_curves("swing", times[keys - 1], 30.0, false, false, tracks).unwrap()
+}
+
+fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool) -> Clip {
+    let source = clip.to_plain();
+    let rig = Rig::new(&source, Some(skeleton), 0.1).unwrap();
+    let mut work = Work::from_plain(&source);
+    let options = CompressOptions {
+        tolerance: Some(tolerance),
+        error_distance: Some(0.1),
+        key_reduction: true,
+    };
+    compress_work(
+        &mut work, &source, &rig, tolerance, true, &options, compensate,
+    )
+    .unwrap()
+}
+
+#[test]
+fn chain_compensation_keeps_the_tolerance_and_saves_bits_on_a_long_chain() {
+    let skeleton = chain(8, 0.3);
+    let clip = swing(&skeleton, 61);
+    let tolerance = 0.001;
+    let with = compressed(&clip, &skeleton, tolerance, true);
+    let without = compressed(&clip, &skeleton, tolerance, false);
+    for c in [&with, &without] {
+        assert!(c.is_compressed());
+        let worst = measure(&clip, c, Some(&skeleton), 0.1)
+            .into_iter()
+            .fold(0.0f32, f32::max);
+        assert!(worst <= tolerance, "error {worst} above {tolerance}");
+    }
+    let (a, b) = (clip_record_size(&with), clip_record_size(&without));
+    assert!(a < b, "compensated {a} B, uncompensated {b} B");
+}
+
+#[test]
+fn mirrored_and_stretched_joints_stay_within_the_tolerance() {
+    // Chain compensation assumes model rotations are products of local rotations; a mirrored
+    // or non-uniformly scaled joint breaks that, and the clip must still compress correctly.
+    for scale in [Vec3::new(-1.0, 1.0, 1.0), Vec3::new(1.0, 2.5, 0.7)] {
+        let joints = (0..6)
+            .map(|i: usize| JointDesc {
+                name: format!("j{i}"),
+                parent: i.checked_sub(1).map(|p| format!("j{p}")),
+                bind_local: Transform {
+                    translation: Vec3::Y * if i == 0 { 0.0 } else { 0.3 },
+                    rotation: Quat::IDENTITY,
+                    scale: if i == 2 { scale } else { Vec3::ONE },
+                },
+                inverse_bind: None,
+            })
+            .collect();
+        let skeleton = Skeleton::from_unordered(joints).unwrap().0;
+        let clip = swing(&skeleton, 45);
+        let (c, r) = compress_clip(&clip, Some(&skeleton), &CompressOptions::peers());
+        assert!(c.is_compressed(), "{scale}: {r:?}");
+        let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+            .into_iter()
+            .fold(0.0f32, f32::max);
+        assert!(worst <= 0.001, "{scale}: error {worst}");
+        assert!(r.compressed_bytes < r.plain_bytes, "{scale}: {r:?}");
+    }
+}
+
+#[test]
+fn incremental_state_matches_a_fresh_evaluation() {
+    // After the descent (thousands of tentative changes and undos), the kept state must be what
+    // quantizing from scratch with the final bit widths gives, bit for bit.
+    let skeleton = chain(5, 0.4);
+    let clip = swing(&skeleton, 40);
+    let source = clip.to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    for compensate in [true, false] {
+        let layout = Layout::new(&work, &rig, 16, compensate);
+        let (_, bits) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
+        let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
+        descend(&mut e);
+        assert!(
+            e.bits.iter().zip(&bits).any(|(a, b)| a < b),
+            "nothing descended"
+        );
+        let fresh = Eval::new(&ctx, &layout, &work, e.bits.clone(), compensate);
+        assert_eq!(e.qi, fresh.qi);
+        assert!(e.within() && fresh.within());
+        for (m, f) in e.model.iter().zip(&fresh.model) {
+            for (a, b) in m.iter().zip(f) {
+                assert!(a.abs_diff_eq(*b, 0.0), "{a:?} != {b:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
+    // About an axis near x, half angle from 36 to 56 degrees: x overtakes w as the largest
+    // component near 46 degrees, which moves every stored component to another slot.
+    let axis = Vec3::new(1.0, 0.0, 0.3).normalize();
+    let v: Vec<Quat> = (0..=40)
+        .map(|d| Quat::from_axis_angle(axis, (72.0 + d as f32).to_radians()))
+        .collect();
+    let split = split_rotations(&v);
+    assert!(split.windows(2).all(|p| p[0].0 == p[1].0), "index changes");
+    for (q, (i, c)) in v.iter().zip(&split) {
+        assert!(q.to_array()[usize::from(*i)].abs() >= MIN_DROPPED);
+        let back = raw_rotation(*i, *c).normalize();
+        assert!(back.dot(*q).abs() > 0.999_999, "{q} {back}");
+    }
+    let range = |s: &[(u8, [f32; 3])]| {
+        (0..3)
+            .map(|a| {
+                let lo = s.iter().map(|x| x.1[a]).fold(f32::MAX, f32::min);
+                let hi = s.iter().map(|x| x.1[a]).fold(f32::MIN, f32::max);
+                hi - lo
+            })
+            .fold(0.0f32, f32::max)
+    };
+    let largest: Vec<(u8, [f32; 3])> = v.iter().map(|q| smallest_three(*q)).collect();
+    // Largest-per-key: the first slot holds x (about 0.68) before the switch and y (0) after.
+    assert!(largest.windows(2).any(|p| p[0].0 != p[1].0));
+    assert!(range(&split) < 0.5 * range(&largest));
+}

@@ -21,15 +21,12 @@
 //! `--sweep` builds sinew's LODs with one quality knob changed at a time (docs/lod.md).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-#[path = "../tests/lod_common.rs"]
-mod lod_common;
-
-use lod_common::{diagonal, hausdorff};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning, DEFAULT_MAX_ERROR};
 use sinew_scene::Scene;
+use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::Path;
 use std::time::Instant;
 

@@ -1,13 +1,11 @@
 //! LOD generation on a synthetic skinned tube (always) and, once importers exist, corpus meshes.
 #![allow(clippy::unwrap_used)]
 
-mod lod_common;
-
-use lod_common::*;
 use sinew_core::glam::{Quat, Vec2, Vec3};
 use sinew_core::{JointDesc, Lod, Skeleton, Submesh, Transform};
 use sinew_pipeline::lod::{build_lods, generate_lods, LodOptions};
 use sinew_scene::{Mesh, Scene, SourceFormat};
+use sinew_testdata::geometry::*;
 
 /// A tube along +Y, 40 rings of 32 vertices, two joints (lower half / upper half, blended in the middle),
 /// two submeshes (rings 0-19 "a", 20-39 "b") that share no vertices but meet at equal positions.

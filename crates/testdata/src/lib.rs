@@ -4,6 +4,8 @@
 //! is missing, [`corpus`] returns `None` so tests can say so and skip, except under CI (`CI` set), where
 //! it panics: CI must never pass by skipping.
 
+pub mod geometry;
+
 use std::path::{Path, PathBuf};
 
 /// The workspace root.

@@ -11,14 +11,12 @@
 //! skin-blind meshoptimizer simplification computed here.
 #![allow(clippy::unwrap_used)]
 
-mod lod_common;
-
-use lod_common::*;
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Clip, ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{generate_lods, LodOptions, DEFAULT_MAX_ERROR};
 use sinew_scene::Scene;
+use sinew_testdata::geometry::*;
 use std::collections::HashMap;
 
 const TARGET_TOLERANCE: f32 = 0.05;

@@ -6,7 +6,7 @@ use std::process::Command;
 #[test]
 fn biped_sections_are_listed_in_file_order_and_fit_the_file() {
     let path = sinew_testdata::fixtures().join("biped.sinew");
-    let out = Command::new(env!("CARGO_BIN_EXE_sinew"))
+    let out = Command::new(env!("CARGO_BIN_EXE_sinew-e2e"))
         .args(["inspect", "--json"])
         .arg(&path)
         .output()

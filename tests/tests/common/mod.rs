@@ -27,7 +27,7 @@ where
     I: IntoIterator<Item = S>,
     S: AsRef<std::ffi::OsStr>,
 {
-    let out: Output = Command::new(env!("CARGO_BIN_EXE_sinew"))
+    let out: Output = Command::new(env!("CARGO_BIN_EXE_sinew-e2e"))
         .args(args)
         .output()
         .expect("running the sinew binary");

@@ -1,5 +1,5 @@
-//! Geometry helpers for the LOD tests, written independently of the simplifier.
-#![allow(dead_code)]
+//! Geometry measurements for LOD tests (point-to-triangle distance, surface samples, Hausdorff distance,
+//! skinned positions), written independently of the simplifier and the runtime they check.
 
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Lod, Skeleton};

@@ -82,3 +82,159 @@ pub(crate) fn truncate(s: &str) -> String {
         t
     }
 }
+
+/// One token of a text source: a run of characters without white space, a double-quoted string (the
+/// quotes removed; it may be empty or hold spaces), or a brace when braces are tokens.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Token {
+    /// The text, without quotes.
+    pub text: String,
+    /// Whether it was written in double quotes.
+    pub quoted: bool,
+    /// The 1-based line it starts on.
+    pub line: usize,
+}
+
+impl Token {
+    /// True for an unquoted `{` or `}`.
+    pub fn is_brace(&self, brace: char) -> bool {
+        !self.quoted && self.text.len() == 1 && self.text.starts_with(brace)
+    }
+}
+
+/// How [`tokens`] splits text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct TokenRules {
+    /// `{` and `}` are tokens of their own even when glued to a word (QC).
+    pub braces: bool,
+    /// `/* ... */` comments, which may span lines (QC).
+    pub block_comments: bool,
+}
+
+/// Splits text into tokens: white space separates, `//` starts a comment to the end of the line,
+/// double quotes group (a quote left open ends at the end of its line). Lines end as in
+/// [`numbered_lines`]. Returns the tokens and, when a block comment is left open, the line it starts on.
+pub(crate) fn tokens(text: &str, rules: TokenRules) -> (Vec<Token>, Option<usize>) {
+    let mut out = Vec::new();
+    let mut open_block: Option<usize> = None;
+    for (line_no, line) in numbered_lines(text) {
+        let chars: Vec<char> = line.chars().collect();
+        let mut i = 0;
+        while i < chars.len() {
+            let c = chars[i];
+            if open_block.is_some() {
+                if c == '*' && chars.get(i + 1) == Some(&'/') {
+                    open_block = None;
+                    i += 2;
+                } else {
+                    i += 1;
+                }
+                continue;
+            }
+            if c.is_whitespace() {
+                i += 1;
+            } else if c == '/' && chars.get(i + 1) == Some(&'/') {
+                break;
+            } else if rules.block_comments && c == '/' && chars.get(i + 1) == Some(&'*') {
+                open_block = Some(line_no);
+                i += 2;
+            } else if c == '"' {
+                let end = chars[i + 1..]
+                    .iter()
+                    .position(|&d| d == '"')
+                    .map_or(chars.len(), |p| i + 1 + p);
+                out.push(Token {
+                    text: chars[i + 1..end].iter().collect(),
+                    quoted: true,
+                    line: line_no,
+                });
+                i = end + 1;
+            } else if rules.braces && (c == '{' || c == '}') {
+                out.push(Token {
+                    text: c.to_string(),
+                    quoted: false,
+                    line: line_no,
+                });
+                i += 1;
+            } else {
+                let start = i;
+                while i < chars.len()
+                    && !chars[i].is_whitespace()
+                    && chars[i] != '"'
+                    && !(rules.braces && (chars[i] == '{' || chars[i] == '}'))
+                    && !(chars[i] == '/' && matches!(chars.get(i + 1), Some('/')))
+                    && !(rules.block_comments
+                        && chars[i] == '/'
+                        && matches!(chars.get(i + 1), Some('*')))
+                {
+                    i += 1;
+                }
+                out.push(Token {
+                    text: chars[start..i].iter().collect(),
+                    quoted: false,
+                    line: line_no,
+                });
+            }
+        }
+    }
+    (out, open_block)
+}
+
+/// The tokens of one line (no braces, no block comments): see [`tokens`].
+pub(crate) fn words(line: &str) -> Vec<String> {
+    tokens(line, TokenRules::default())
+        .0
+        .into_iter()
+        .map(|t| t.text)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn words_keep_quoted_spaces_and_drop_comments() {
+        assert_eq!(
+            words("0 \"Bip01 L Thigh\" -1 // a comment"),
+            vec!["0", "Bip01 L Thigh", "-1"]
+        );
+        assert_eq!(words("\t1\t2  \"\"  x"), vec!["1", "2", "", "x"]);
+        assert_eq!(
+            words("\"open quote to the end"),
+            vec!["open quote to the end"]
+        );
+    }
+
+    #[test]
+    fn tokens_split_braces_and_block_comments_across_lines() {
+        let text = "$a \"x\"{ b }\r\n/* one\ntwo */ c//d\n{e}";
+        let rules = TokenRules {
+            braces: true,
+            block_comments: true,
+        };
+        let (t, open) = tokens(text, rules);
+        let got: Vec<(&str, bool, usize)> = t
+            .iter()
+            .map(|t| (t.text.as_str(), t.quoted, t.line))
+            .collect();
+        assert_eq!(
+            got,
+            vec![
+                ("$a", false, 1),
+                ("x", true, 1),
+                ("{", false, 1),
+                ("b", false, 1),
+                ("}", false, 1),
+                ("c", false, 3),
+                ("{", false, 4),
+                ("e", false, 4),
+                ("}", false, 4),
+            ]
+        );
+        assert_eq!(open, None);
+        assert!(t[2].is_brace('{') && !t[1].is_brace('{'));
+        let (_, open) = tokens("a /* never closed\nb", rules);
+        assert_eq!(open, Some(1));
+    }
+}

@@ -107,6 +107,7 @@ pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
         clips,
         source_vertex,
         masks: scene.masks.clone(),
+        game: scene.game.clone(),
     };
     format::validate(&asset)?;
     Ok(asset)

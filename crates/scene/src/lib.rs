@@ -30,6 +30,12 @@ pub enum SourceFormat {
     Bvh,
     /// sinew's own `.sinew`.
     Sinew,
+    /// Half-Life (GoldSrc) compiled model `.mdl`, version 10.
+    Mdl,
+    /// Half-Life StudioMDL data `.smd`.
+    Smd,
+    /// Half-Life model source `.qc` (with the SMD files it names).
+    Qc,
 }
 
 impl SourceFormat {
@@ -41,6 +47,9 @@ impl SourceFormat {
             SourceFormat::Obj => "obj",
             SourceFormat::Bvh => "bvh",
             SourceFormat::Sinew => "sinew",
+            SourceFormat::Mdl => "mdl",
+            SourceFormat::Smd => "smd",
+            SourceFormat::Qc => "qc",
         }
     }
 }
@@ -104,6 +113,20 @@ pub struct Material {
     pub texture: Option<String>,
 }
 
+/// A texture image carried in the source (Half-Life models embed theirs), as 8-bit RGBA rows from the
+/// top. Writers put it beside the output as PNG; a material names it in `texture`.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Image {
+    /// The name materials use for it (the source's texture name, e.g. `skin.bmp`).
+    pub name: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height * 4` bytes, RGBA, rows from the top.
+    pub rgba: Vec<u8>,
+}
+
 /// A generated level of detail and what the simplifier reached.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct GeneratedLod {
@@ -156,6 +179,9 @@ pub struct SceneClip {
 /// A named per-joint weight mask: `(joint name, weight)` pairs, unlisted joints weigh 0.
 pub use sinew_core::format::Mask;
 
+/// Game data a source carries beyond skeleton, meshes and clips (see [`sinew_core::format::game`]).
+pub use sinew_core::format::game::{self, GameData};
+
 /// An imported asset: at most one skeleton, any number of meshes and clips.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
@@ -173,6 +199,10 @@ pub struct Scene {
     pub diagnostics: Vec<Diagnostic>,
     /// Named joint masks (from `split` or `--mask`), carried into the `.sinew` MASK section.
     pub masks: Vec<Mask>,
+    /// Texture images the source carried (Half-Life); materials name them.
+    pub images: Vec<Image>,
+    /// Game data kept from the source (attachments, hit boxes, events...), carried into `GAME`.
+    pub game: GameData,
 }
 
 impl Scene {
@@ -186,6 +216,8 @@ impl Scene {
             clips: Vec::new(),
             diagnostics: Vec::new(),
             masks: Vec::new(),
+            images: Vec::new(),
+            game: GameData::default(),
         }
     }
 

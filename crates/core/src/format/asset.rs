@@ -2,6 +2,7 @@
 //! the container's layout constants that the reader and writer share.
 
 use super::error::{FormatError, FormatErrorKind};
+use super::game::GameData;
 use crate::{Clip, Lod, Mesh, Skeleton};
 use std::fmt;
 
@@ -16,6 +17,8 @@ pub const VERSION_MINOR: u16 = 1;
 /// Minor version written when a file holds compressed clips (clip flag bit 2), which 1.0 and 1.1
 /// readers reject.
 pub const VERSION_MINOR_COMPRESSED: u16 = 2;
+/// Minor version of files that hold game data (`GAME`, added in 1.3; older readers skip it).
+pub const VERSION_MINOR_GAME: u16 = 3;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).
@@ -48,8 +51,10 @@ impl Tag {
     pub const SOURCE_VERTICES: Tag = Tag(*b"SRCV");
     /// Named joint masks (since 1.1).
     pub const MASKS: Tag = Tag(*b"MASK");
+    /// Game data (attachments, hit boxes, controllers, body groups, skins, clip events; since 1.3).
+    pub const GAME: Tag = Tag(*b"GAME");
     /// The tags version 1 defines, in the order the writer emits them.
-    pub const KNOWN: [Tag; 7] = [
+    pub const KNOWN: [Tag; 8] = [
         Tag::STRINGS,
         Tag::SKELETON,
         Tag::MATERIALS,
@@ -57,6 +62,7 @@ impl Tag {
         Tag::CLIPS,
         Tag::SOURCE_VERTICES,
         Tag::MASKS,
+        Tag::GAME,
     ];
 
     /// True for the tags version 1 defines.
@@ -191,6 +197,8 @@ pub struct Asset {
     pub source_vertex: Vec<Option<SourceVertexMap>>,
     /// Named joint masks, in order. Written in the MASK section (format 1.1).
     pub masks: Vec<Mask>,
+    /// Game data kept from the source. Written in the GAME section (format 1.3) when not empty.
+    pub game: GameData,
 }
 
 impl Asset {
@@ -224,6 +232,7 @@ impl Asset {
 /// meshes and LODs it describes.
 pub fn validate(asset: &Asset) -> Result<(), FormatError> {
     let joints = asset.skeleton.as_ref().map(Skeleton::len);
+    super::game::check(&asset.game).map_err(|m| FormatError::invalid("GAME", None, m))?;
     for m in &asset.materials {
         if !m.base_color.iter().all(|v| v.is_finite()) {
             return Err(FormatError::invalid(

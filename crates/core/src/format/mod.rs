@@ -11,14 +11,16 @@
 
 mod asset;
 mod error;
+pub mod game;
 mod read;
 mod write;
 
 pub use asset::{
     validate, Asset, LodInfo, Mask, Material, SectionInfo, SourceVertexMap, Tag, ALIGN,
     HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING, SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR,
-    VERSION_MINOR, VERSION_MINOR_COMPRESSED,
+    VERSION_MINOR, VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME,
 };
 pub use error::{FormatError, FormatErrorKind};
+pub use game::GameData;
 pub use read::{read, sections};
 pub use write::{clip_record_size, write};

@@ -3,13 +3,14 @@
 use super::asset::{
     validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
     SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPRESSED,
+    VERSION_MINOR_GAME,
 };
 use super::error::FormatError;
 use crate::clip::Channel;
 use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
-/// Encodes an asset as a `.sinew` file, version 1.1.
+/// Encodes an asset as a `.sinew` file, version 1.1 (1.2 with compressed clips, 1.3 with game data).
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -36,8 +37,13 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
     if !asset.masks.is_empty() {
         sections.push((Tag::MASKS, masks(&asset.masks, &mut strings)));
     }
+    if !asset.game.is_empty() {
+        sections.push((Tag::GAME, game(&asset.game, &mut strings)));
+    }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
-    let minor = if asset.clips.iter().any(Clip::is_compressed) {
+    let minor = if !asset.game.is_empty() {
+        VERSION_MINOR_GAME
+    } else if asset.clips.iter().any(Clip::is_compressed) {
         VERSION_MINOR_COMPRESSED
     } else {
         VERSION_MINOR
@@ -523,5 +529,123 @@ fn masks(list: &[super::asset::Mask], strings: &mut Strings) -> Vec<u8> {
             b.f32(*w);
         }
     }
+    b.0
+}
+
+/// Bytes of one clip record of the `GAME` section.
+pub(crate) const GAME_CLIP_RECORD: usize = 96;
+
+/// The `GAME` section (format 1.3): a 64-byte header of counts, then one table after another, each
+/// starting at a multiple of 16.
+fn game(g: &super::game::GameData, strings: &mut Strings) -> Vec<u8> {
+    let mut b = Buf::default();
+    let opt = |s: &str, strings: &mut Strings| {
+        if s.is_empty() {
+            NO_STRING
+        } else {
+            strings.get(s)
+        }
+    };
+    let entries: usize = g.body_groups.iter().map(|bg| bg.meshes.len()).sum();
+    let events: usize = g.clips.iter().map(|c| c.events.len()).sum();
+    let slots = g.skin_families.first().map_or(0, Vec::len);
+    b.u32(u32::from(g.eye_position.is_some()));
+    b.f32s(&g.eye_position.unwrap_or_default());
+    for n in [
+        g.attachments.len(),
+        g.hitboxes.len(),
+        g.controllers.len(),
+        g.body_groups.len(),
+        entries,
+        g.skin_families.len(),
+        slots,
+        g.material_flags.len(),
+        g.clips.len(),
+        events,
+        g.transition_nodes as usize,
+    ] {
+        b.u32(n as u32);
+    }
+    b.u32(0);
+    for a in &g.attachments {
+        b.u32(strings.get(&a.name));
+        b.u32(strings.get(&a.joint));
+        b.f32s(&a.offset);
+    }
+    b.align();
+    for h in &g.hitboxes {
+        b.u32(strings.get(&h.joint));
+        b.u32(h.group as u32);
+        b.f32s(&h.min);
+        b.f32s(&h.max);
+    }
+    b.align();
+    for c in &g.controllers {
+        b.u32(c.index as u32);
+        b.u32(strings.get(&c.joint));
+        b.u32(c.channel);
+        b.f32(c.start);
+        b.f32(c.end);
+        b.u32(c.rest as u32);
+    }
+    b.align();
+    let mut first = 0u32;
+    for bg in &g.body_groups {
+        b.u32(strings.get(&bg.name));
+        b.u32(first);
+        b.u32(bg.meshes.len() as u32);
+        first += bg.meshes.len() as u32;
+    }
+    b.align();
+    for m in g.body_groups.iter().flat_map(|bg| &bg.meshes) {
+        let i = opt(m, strings);
+        b.u32(i);
+    }
+    b.align();
+    for m in g.skin_families.iter().flatten() {
+        b.u32(strings.get(m));
+    }
+    b.align();
+    for f in &g.material_flags {
+        b.u32(strings.get(&f.material));
+        b.u32(f.flags);
+    }
+    b.align();
+    let mut first = 0u32;
+    for c in &g.clips {
+        b.u32(strings.get(&c.clip));
+        b.u32(c.activity as u32);
+        b.u32(c.activity_weight as u32);
+        b.u32(first);
+        b.u32(c.events.len() as u32);
+        first += c.events.len() as u32;
+        b.u32(c.motion_type);
+        let j = opt(&c.motion_joint, strings);
+        b.u32(j);
+        b.f32s(&c.linear_movement);
+        let blend = c.blend.clone().unwrap_or_default();
+        b.u32(u32::from(c.blend.is_some()));
+        let s = opt(&blend.sequence, strings);
+        b.u32(s);
+        b.u32(blend.index);
+        b.u32(blend.count);
+        b.u32(blend.types[0]);
+        b.u32(blend.types[1]);
+        b.f32s(&blend.start);
+        b.f32s(&blend.end);
+        b.u32(c.entry_node as u32);
+        b.u32(c.exit_node as u32);
+        b.u32(c.node_flags as u32);
+        b.u32(0);
+    }
+    b.align();
+    for e in g.clips.iter().flat_map(|c| &c.events) {
+        b.u32(e.frame as u32);
+        b.u32(e.event as u32);
+        b.u32(e.kind as u32);
+        b.u32(strings.get(&e.options));
+    }
+    b.align();
+    b.bytes(&g.transitions);
     b.0
 }

@@ -8,6 +8,7 @@ use crate::format::asset::{
     VERSION_MAJOR,
 };
 use crate::format::error::{FormatError, FormatErrorKind as K};
+use crate::format::game::GameData;
 use crate::Skeleton;
 
 /// The validated header and section table.
@@ -230,6 +231,10 @@ pub fn read(bytes: &[u8]) -> Result<Asset> {
         Some(mut c) => masks(&mut c, &strs)?,
         None => Vec::new(),
     };
+    let game = match cur(7) {
+        Some(mut c) => super::game::game(&mut c, &strs)?,
+        None => GameData::default(),
+    };
     Ok(Asset {
         skeleton,
         materials,
@@ -238,5 +243,6 @@ pub fn read(bytes: &[u8]) -> Result<Asset> {
         clips,
         source_vertex,
         masks,
+        game,
     })
 }

@@ -4,6 +4,7 @@
 mod clips;
 mod container;
 mod cursor;
+mod game;
 mod sections;
 
 pub use container::{read, sections};

@@ -1,4 +1,5 @@
-//! sinew-import turns the bytes of a source file (MS3D, glTF 2.0, OBJ, BVH, `.sinew`) into a sinew
+//! sinew-import turns the bytes of a source file (MS3D, glTF 2.0, OBJ, BVH, Half-Life MDL/SMD/QC,
+//! `.sinew`) into a sinew
 //! [`Scene`].
 //!
 //! Every importer takes untrusted bytes: counts are checked against the bytes present before anything is
@@ -12,6 +13,7 @@
 pub mod bvh;
 pub mod error;
 pub mod gltf;
+pub mod halflife;
 pub mod ms3d;
 pub mod obj;
 pub mod sinew;
@@ -60,6 +62,12 @@ pub enum Format {
     Bvh,
     /// `.sinew`
     Sinew,
+    /// `.mdl` (GoldSrc, version 10)
+    Mdl,
+    /// `.smd`
+    Smd,
+    /// `.qc`
+    Qc,
 }
 
 impl Format {
@@ -72,6 +80,9 @@ impl Format {
             "obj" => Format::Obj,
             "bvh" => Format::Bvh,
             "sinew" => Format::Sinew,
+            "mdl" => Format::Mdl,
+            "smd" => Format::Smd,
+            "qc" => Format::Qc,
             _ => return None,
         })
     }
@@ -91,6 +102,9 @@ pub fn import_bytes(
         Format::Obj => obj::import(file_name, bytes, resolve, options),
         Format::Bvh => bvh::import(file_name, bytes, resolve, options),
         Format::Sinew => sinew::import(file_name, bytes, resolve, options),
+        Format::Mdl => halflife::entry::import_mdl(file_name, bytes, resolve, options),
+        Format::Smd => halflife::entry::import_smd(file_name, bytes, resolve, options),
+        Format::Qc => halflife::entry::import_qc(file_name, bytes, resolve, options),
     }
 }
 
@@ -101,7 +115,7 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<Scene, Import
         ImportError::in_section(
             &name,
             "file",
-            "unsupported extension (expected .ms3d, .gltf, .glb, .obj, .bvh or .sinew)",
+            "unsupported extension (expected .ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc or .sinew)",
         )
     })?;
     let bytes =

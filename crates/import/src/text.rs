@@ -95,13 +95,6 @@ pub(crate) struct Token {
     pub line: usize,
 }
 
-impl Token {
-    /// True for an unquoted `{` or `}`.
-    pub fn is_brace(&self, brace: char) -> bool {
-        !self.quoted && self.text.len() == 1 && self.text.starts_with(brace)
-    }
-}
-
 /// How [`tokens`] splits text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) struct TokenRules {
@@ -233,7 +226,6 @@ mod tests {
             ]
         );
         assert_eq!(open, None);
-        assert!(t[2].is_brace('{') && !t[1].is_brace('{'));
         let (_, open) = tokens("a /* never closed\nb", rules);
         assert_eq!(open, Some(1));
     }

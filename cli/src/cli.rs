@@ -77,7 +77,7 @@ pub enum Command {
 }
 
 /// Import options shared by every command that reads source files.
-#[derive(Debug, Args, Clone)]
+#[derive(Debug, Args, Clone, Default)]
 pub struct ImportArgs {
     /// MS3D: how position keys combine with the bind pose.
     #[arg(long, value_enum, default_value_t = PositionKeys::Auto, value_name = "RULE")]
@@ -88,13 +88,14 @@ pub struct ImportArgs {
 }
 
 /// `--ms3d-position-keys` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
 pub enum PositionKeys {
     /// Milkshape's viewer: key rotated by the bind rotation, then added.
     Viewer,
     /// Key added in the parent's space.
     Parent,
     /// Decide per file.
+    #[default]
     Auto,
 }
 
@@ -157,13 +158,18 @@ pub struct CompressArgs {
 /// `sinew convert`.
 #[derive(Debug, Args)]
 pub struct ConvertArgs {
-    /// Input files (.ms3d, .gltf, .glb, .obj, .bvh, .sinew).
+    /// Input files (.ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc, .sinew), or folders (with
+    /// --out-dir): every model in a folder is converted, recognised by content.
     #[arg(required = true, value_name = "INPUT")]
     pub inputs: Vec<PathBuf>,
+    /// Do not write the textures a model carries (Half-Life) as PNG files beside the output.
+    #[arg(long)]
+    pub no_textures: bool,
     /// Output file (exactly one input).
     #[arg(short, long, value_name = "OUT.sinew", conflicts_with = "out_dir")]
     pub output: Option<PathBuf>,
-    /// Output directory: each input becomes DIR/<stem>.sinew (batch mode).
+    /// Output directory, created when missing: each input becomes DIR/<stem>.sinew, and a folder's
+    /// models keep their place in its tree (batch mode).
     #[arg(long, value_name = "DIR")]
     pub out_dir: Option<PathBuf>,
     /// Worker threads for batch mode (default: all cores).

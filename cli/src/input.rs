@@ -7,7 +7,7 @@ use sinew_scene::Scene;
 use std::path::Path;
 
 /// The extensions sinew reads, as error messages list them.
-pub const SUPPORTED: &str = ".ms3d, .gltf, .glb, .obj, .bvh, .sinew";
+pub const SUPPORTED: &str = ".ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc, .sinew";
 
 /// Checks that `path` is an existing regular file with a supported extension.
 pub fn check_input(path: &Path) -> anyhow::Result<Format> {
@@ -46,4 +46,13 @@ pub fn import_options(args: &ImportArgs) -> ImportOptions {
 pub fn import(path: &Path, args: &ImportArgs) -> anyhow::Result<Scene> {
     check_input(path)?;
     Ok(sinew_import::import_path(path, &import_options(args))?)
+}
+
+/// Imports a file as `format` (recognised by content, whatever its extension).
+pub fn import_as(path: &Path, format: Format, args: &ImportArgs) -> anyhow::Result<Scene> {
+    Ok(sinew_import::import_path_as(
+        path,
+        format,
+        &import_options(args),
+    )?)
 }

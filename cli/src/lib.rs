@@ -10,6 +10,7 @@
 //! [`main_entry`]; each subcommand lives in its own module under [`commands`], argument definitions in
 //! [`cli`], input checks in [`input`] and output helpers (JSON, atomic writes) in [`output`].
 
+pub mod batch;
 pub mod cli;
 pub mod commands;
 pub mod input;

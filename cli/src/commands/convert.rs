@@ -4,6 +4,7 @@
 //! The JSON report is [`ConvertReport`]; the per-output part, [`OutputDetails`], is shared with `split`
 //! and `lod`. Field names are a stable interface documented in docs/cli.md.
 
+use crate::batch::{self, Job};
 use crate::cli::ConvertArgs;
 use crate::output::{check_output_path, print_json, write_atomic, Ctx};
 use crate::report::{
@@ -19,10 +20,9 @@ use sinew_pipeline::compile::{CompileOptions, CompileReport};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_scene::Scene;
-use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Builds the details of an output from the final scene and what writing it reported.
 pub fn details(
@@ -71,6 +71,7 @@ pub fn details(
         cuts,
         splits,
         diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
+        textures: Vec::new(),
     }
 }
 
@@ -114,11 +115,16 @@ struct Plan {
     split: SplitPlan,
     lod: Option<LodOptions>,
     compress: Option<CompressOptions>,
+    textures: bool,
 }
 
-fn convert_one(input: &Path, output: &Path, plan: &Plan) -> anyhow::Result<OutputDetails> {
+fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
+    let (input, output) = (&job.input, &job.output);
     let label = input.display().to_string();
-    let mut scene = crate::input::import(input, &plan.import)?;
+    let mut scene = match job.format {
+        Some(format) => crate::input::import_as(input, format, &plan.import)?,
+        None => crate::input::import(input, &plan.import)?,
+    };
     let cuts = match &plan.clips {
         Some(spec) => steps::cut(&mut scene, spec, &label)?,
         None => Vec::new(),
@@ -136,8 +142,29 @@ fn convert_one(input: &Path, output: &Path, plan: &Plan) -> anyhow::Result<Outpu
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
     steps::lods(&mut scene, plan.lod.as_ref(), &label)?;
+    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow!("{}: cannot create the folder: {e}", dir.display()))?;
+    }
+    // Textures first: a written .sinew always has its textures beside it.
+    let mut textures = Vec::new();
+    if plan.textures && !scene.images.is_empty() {
+        let stem = output
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let files = sinew_pipeline::texture::textures_for_output(&mut scene, &stem)
+            .map_err(|e| anyhow!("{label}: {e}"))?;
+        for (name, bytes) in files {
+            let path = output.with_file_name(&name);
+            write_atomic(&path, &bytes)?;
+            textures.push(path.display().to_string());
+        }
+    }
     let written = write_scene(&scene, &label, output, plan.compress.as_ref())?;
-    Ok(details(&scene, written, motions, cuts, splits))
+    let mut d = details(&scene, written, motions, cuts, splits);
+    d.textures = textures;
+    Ok(d)
 }
 
 /// Runs `sinew convert`.
@@ -158,7 +185,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if args.retarget && args.anim.is_empty() {
         bail!("--retarget: needs at least one --anim motion file");
     }
-    let outputs: Vec<PathBuf> = match (&args.output, &args.out_dir) {
+    let jobs: Vec<Job> = match (&args.output, &args.out_dir) {
         (Some(o), None) => {
             if args.inputs.len() != 1 {
                 bail!(
@@ -166,45 +193,27 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
                     args.inputs.len()
                 );
             }
+            if args.inputs[0].is_dir() {
+                bail!(
+                    "{}: is a folder; convert folders with --out-dir DIR",
+                    args.inputs[0].display()
+                );
+            }
             check_output_path(o)?;
-            vec![o.clone()]
+            vec![Job {
+                input: args.inputs[0].clone(),
+                output: o.clone(),
+                format: None,
+            }]
         }
         (None, Some(dir)) => {
-            if !dir.is_dir() {
-                bail!("{}: output directory does not exist", dir.display());
+            if dir.exists() && !dir.is_dir() {
+                bail!("{}: --out-dir is a file, not a folder", dir.display());
             }
-            // DIR/<stem>.sinew; inputs whose stems collide use DIR/<file name>.sinew instead.
-            let mut stems: HashMap<std::ffi::OsString, usize> = HashMap::new();
-            for i in &args.inputs {
-                let stem = i
-                    .file_stem()
-                    .ok_or_else(|| anyhow!("{}: has no file name", i.display()))?;
-                *stems.entry(stem.to_os_string()).or_default() += 1;
-            }
-            let mut seen: HashMap<PathBuf, &Path> = HashMap::new();
-            let mut outs = Vec::with_capacity(args.inputs.len());
-            for i in &args.inputs {
-                let (Some(stem), Some(file_name)) = (i.file_stem(), i.file_name()) else {
-                    bail!("{}: has no file name", i.display());
-                };
-                let mut name = if stems.get(stem).copied().unwrap_or(0) > 1 {
-                    file_name.to_os_string()
-                } else {
-                    stem.to_os_string()
-                };
-                name.push(".sinew");
-                let out = dir.join(name);
-                if let Some(prev) = seen.insert(out.clone(), i) {
-                    bail!(
-                        "{} and {} would both be written to {}",
-                        prev.display(),
-                        i.display(),
-                        out.display()
-                    );
-                }
-                outs.push(out);
-            }
-            outs
+            let jobs = batch::plan(&args.inputs, dir, &args.import)?;
+            std::fs::create_dir_all(dir)
+                .map_err(|e| anyhow!("{}: cannot create the output folder: {e}", dir.display()))?;
+            jobs
         }
         _ => bail!("convert: give -o OUT.sinew (one input) or --out-dir DIR"),
     };
@@ -225,15 +234,16 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         split,
         lod,
         compress,
+        textures: !args.no_textures,
     };
 
     // One input with -o: an error is the command's error (exit 2, one line).
     if args.output.is_some() {
-        let (input, output) = (&args.inputs[0], &outputs[0]);
-        let d = convert_one(input, output, &plan)?;
+        let job = &jobs[0];
+        let d = convert_one(job, &plan)?;
         let file = FileReport {
-            input: input.display().to_string(),
-            output: output.display().to_string(),
+            input: job.input.display().to_string(),
+            output: job.output.display().to_string(),
             status: "converted",
             error: None,
             details: Some(d),
@@ -251,7 +261,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     // Batch.
     let bar = (!ctx.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::with_draw_target(
-            Some(args.inputs.len() as u64),
+            Some(jobs.len() as u64),
             indicatif::ProgressDrawTarget::stderr(),
         );
         if let Ok(style) =
@@ -266,11 +276,10 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         .build()
         .map_err(|e| anyhow!("--jobs: cannot start worker threads: {e}"))?;
     let files: Vec<FileReport> = pool.install(|| {
-        args.inputs
-            .par_iter()
-            .zip(outputs.par_iter())
-            .map(|(input, output)| {
-                let result = convert_one(input, output, &plan);
+        jobs.par_iter()
+            .map(|job| {
+                let (input, output) = (&job.input, &job.output);
+                let result = convert_one(job, &plan);
                 if let Some(b) = &bar {
                     b.inc(1);
                 }

@@ -102,6 +102,16 @@ pub fn build_report(path: &Path, file_size: Option<u64>, scene: &Scene) -> Inspe
         clips,
         meshes,
         materials,
+        game: super::game::game_report(&scene.game),
+        images: scene
+            .images
+            .iter()
+            .map(|im| super::scene::ImageReport {
+                name: im.name.clone(),
+                width: im.width,
+                height: im.height,
+            })
+            .collect(),
         sections: Vec::new(),
         masks: scene
             .masks

@@ -140,6 +140,8 @@ pub struct OutputDetails {
     pub splits: Vec<SplitReport>,
     /// Every diagnostic raised on the way: importer, mapping, retargeting.
     pub diagnostics: Vec<DiagnosticReport>,
+    /// PNG files written beside the output for the textures the source carried (Half-Life).
+    pub textures: Vec<String>,
 }
 
 /// One mesh of the output.

@@ -7,6 +7,7 @@
 
 pub mod build;
 pub mod convert;
+pub mod game;
 pub mod scene;
 #[cfg(test)]
 mod tests;

@@ -9,7 +9,7 @@ use serde::Serialize;
 pub struct InspectReport {
     /// The path as given on the command line.
     pub file: String,
-    /// Source format: `ms3d`, `gltf`, `obj`, `bvh` or `sinew`.
+    /// Source format: `ms3d`, `gltf`, `obj`, `bvh`, `mdl`, `smd`, `qc` or `sinew`.
     pub format: &'static str,
     /// Size of the file in bytes.
     pub file_size: Option<u64>,
@@ -29,6 +29,21 @@ pub struct InspectReport {
     pub sections: Vec<SectionReport>,
     /// Every diagnostic the importer raised, in order.
     pub diagnostics: Vec<DiagnosticReport>,
+    /// Game data (Half-Life models; `.sinew` GAME section), or `null`.
+    pub game: Option<super::game::GameReport>,
+    /// Texture images the source carries, as `name`, `width`, `height` (Half-Life models).
+    pub images: Vec<ImageReport>,
+}
+
+/// One texture image a source carries.
+#[derive(Debug, Serialize)]
+pub struct ImageReport {
+    /// Texture name.
+    pub name: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
 }
 
 /// One section of a `.sinew` file.

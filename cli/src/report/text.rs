@@ -229,6 +229,13 @@ pub fn human(r: &InspectReport) -> String {
         }
     }
 
+    for im in &r.images {
+        let _ = writeln!(o, "image {:?}: {}x{}", im.name, im.width, im.height);
+    }
+    if let Some(g) = &r.game {
+        o.push_str(&super::game::human(g));
+    }
+
     let _ = writeln!(o, "diagnostics: {}", r.diagnostics.len());
     for d in &r.diagnostics {
         let figs = if d.figures.is_empty() {

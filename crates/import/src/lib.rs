@@ -88,6 +88,69 @@ impl Format {
     }
 }
 
+/// What a file is, by its content: a model or motion sinew converts, a companion that belongs to
+/// another file (a Half-Life texture or sequence-group file), or neither.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    /// A file to convert, in this format.
+    Model(Format),
+    /// A GoldSrc `NAMET.mdl`: textures only; read with its model.
+    MdlTextures,
+    /// A GoldSrc `NAME01.mdl` sequence group (`IDSQ`); read with its model.
+    MdlSequenceGroup,
+    /// Anything else (material libraries, buffers, images, unknown files).
+    Other,
+}
+
+impl FileKind {
+    /// Recognises a file by its first bytes, using the extension only for text formats that have no
+    /// signature (OBJ, glTF JSON) and to confirm the loose text signatures of BVH, SMD and QC.
+    pub fn sniff(path: &Path, head: &[u8]) -> FileKind {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        let i32_at = |at: usize| {
+            head.get(at..at + 4)
+                .map_or(0, |b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        };
+        if head.starts_with(b"IDSQ") {
+            return FileKind::MdlSequenceGroup;
+        }
+        if head.starts_with(b"IDST") {
+            // numbones, numseq, numbodyparts, numtextures
+            let (bones, seqs, parts, textures) =
+                (i32_at(140), i32_at(164), i32_at(204), i32_at(180));
+            return if bones == 0 && seqs == 0 && parts == 0 && textures > 0 {
+                FileKind::MdlTextures
+            } else {
+                FileKind::Model(Format::Mdl)
+            };
+        }
+        if head.starts_with(b"MS3D000000") {
+            return FileKind::Model(Format::Ms3d);
+        }
+        if head.starts_with(&sinew_core::format::MAGIC) {
+            return FileKind::Model(Format::Sinew);
+        }
+        if head.starts_with(b"glTF") {
+            return FileKind::Model(Format::Gltf);
+        }
+        let text = String::from_utf8_lossy(&head[..head.len().min(512)]).to_ascii_lowercase();
+        let first = text.trim_start_matches('\u{feff}').trim_start();
+        match ext.as_str() {
+            "gltf" => FileKind::Model(Format::Gltf),
+            "obj" => FileKind::Model(Format::Obj),
+            "bvh" if first.starts_with("hierarchy") => FileKind::Model(Format::Bvh),
+            "smd" if first.starts_with("version") => FileKind::Model(Format::Smd),
+            "qc" => FileKind::Model(Format::Qc),
+            _ if first.starts_with("hierarchy") => FileKind::Model(Format::Bvh),
+            _ => FileKind::Other,
+        }
+    }
+}
+
 /// Imports bytes of a known format.
 pub fn import_bytes(
     format: Format,
@@ -118,12 +181,28 @@ pub fn import_path(path: &Path, options: &ImportOptions) -> Result<Scene, Import
             "unsupported extension (expected .ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc or .sinew)",
         )
     })?;
+    import_path_as(path, format, options)
+}
+
+/// Reads a file as the given format, resolving referenced files beside it.
+pub fn import_path_as(
+    path: &Path,
+    format: Format,
+    options: &ImportOptions,
+) -> Result<Scene, ImportError> {
+    let name = path.display().to_string();
     let bytes =
         std::fs::read(path).map_err(|e| ImportError::in_section(&name, "file", e.to_string()))?;
+    let resolve = beside(path);
+    import_bytes(format, &name, &bytes, &resolve, options)
+}
+
+/// A resolver that reads files by the relative path written in `path` (backslashes allowed),
+/// from the folder `path` is in.
+pub fn beside(path: &Path) -> impl Fn(&str) -> std::io::Result<Vec<u8>> {
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let resolve = move |rel: &str| -> std::io::Result<Vec<u8>> {
+    move |rel: &str| -> std::io::Result<Vec<u8>> {
         let rel = rel.replace('\\', "/");
         std::fs::read(dir.join(rel))
-    };
-    import_bytes(format, &name, &bytes, &resolve, options)
+    }
 }

@@ -11,6 +11,7 @@ pub mod lod;
 pub mod mapping;
 pub mod retarget;
 pub mod split;
+pub mod texture;
 pub mod verify;
 
 pub use cut::{cut_clips, CutError};

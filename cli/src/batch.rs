@@ -1,0 +1,270 @@
+//! Batch inputs of `convert --out-dir`: folders walked for the models they hold (recognised by content,
+//! not by name), companion files folded into the model that reads them (Half-Life texture and
+//! sequence-group files, the SMDs a QC names), and output paths that mirror each folder's tree under
+//! the output folder. Everything is sorted, so the plan is the same on every run.
+
+use crate::cli::ImportArgs;
+use anyhow::{anyhow, bail};
+use sinew_import::{FileKind, Format};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::ffi::OsString;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// How deep a folder walk goes.
+pub const MAX_DEPTH: usize = 64;
+
+/// One model to convert.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Job {
+    /// The input file.
+    pub input: PathBuf,
+    /// The `.sinew` to write.
+    pub output: PathBuf,
+    /// Its format: from the extension for files named on the command line, by content in folders.
+    pub format: Option<Format>,
+}
+
+/// The first bytes of a file, enough to recognise it.
+fn head(path: &Path) -> std::io::Result<Vec<u8>> {
+    let mut buf = Vec::with_capacity(512);
+    std::fs::File::open(path)?.take(512).read_to_end(&mut buf)?;
+    Ok(buf)
+}
+
+/// The regular files under `dir`, sorted by path; symbolic links to folders are not followed.
+fn walk(dir: &Path, depth: usize, out: &mut Vec<PathBuf>) -> anyhow::Result<()> {
+    if depth > MAX_DEPTH {
+        bail!("{}: folders nest deeper than {MAX_DEPTH}", dir.display());
+    }
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| anyhow!("{}: cannot list the folder: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .collect();
+    entries.sort();
+    for p in entries {
+        let meta = std::fs::symlink_metadata(&p).map_err(|e| anyhow!("{}: {e}", p.display()))?;
+        if meta.is_dir() {
+            walk(&p, depth + 1, out)?;
+        } else if meta.is_file() || (meta.file_type().is_symlink() && p.is_file()) {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+/// The files a QC reads (its includes and SMDs), found by compiling it with a resolver that records
+/// every name asked for.
+fn qc_companions(qc: &Path, import: &ImportArgs) -> BTreeSet<PathBuf> {
+    let dir = qc.parent().map(Path::to_path_buf).unwrap_or_default();
+    let asked: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+    let inner = sinew_import::beside(qc);
+    let resolve = |rel: &str| -> std::io::Result<Vec<u8>> {
+        if let Ok(mut a) = asked.lock() {
+            a.push(normal(&dir.join(rel.replace('\\', "/"))));
+        }
+        inner(rel)
+    };
+    if let Ok(bytes) = std::fs::read(qc) {
+        let _ = sinew_import::import_bytes(
+            Format::Qc,
+            &qc.display().to_string(),
+            &bytes,
+            &resolve,
+            &crate::input::import_options(import),
+        );
+    }
+    asked.into_inner().unwrap_or_default().into_iter().collect()
+}
+
+/// A path with `.` and `..` components folded (without touching the file system).
+fn normal(p: &Path) -> PathBuf {
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            std::path::Component::CurDir => {}
+            std::path::Component::ParentDir => {
+                if !out.pop() {
+                    out.push("..");
+                }
+            }
+            other => out.push(other.as_os_str()),
+        }
+    }
+    out
+}
+
+/// Output names in one folder: `<stem>.sinew`, or `<file name>.sinew` for inputs whose stems collide.
+fn names_in(folder_inputs: &[&Path]) -> anyhow::Result<Vec<OsString>> {
+    let mut stems: HashMap<OsString, usize> = HashMap::new();
+    for i in folder_inputs {
+        let stem = i
+            .file_stem()
+            .ok_or_else(|| anyhow!("{}: has no file name", i.display()))?;
+        *stems.entry(stem.to_os_string()).or_default() += 1;
+    }
+    folder_inputs
+        .iter()
+        .map(|i| {
+            let (Some(stem), Some(file_name)) = (i.file_stem(), i.file_name()) else {
+                bail!("{}: has no file name", i.display());
+            };
+            let mut name = if stems.get(stem).copied().unwrap_or(0) > 1 {
+                file_name.to_os_string()
+            } else {
+                stem.to_os_string()
+            };
+            name.push(".sinew");
+            Ok(name)
+        })
+        .collect()
+}
+
+/// Plans a batch: files as given, folders walked; each output under `out_dir`.
+pub fn plan(inputs: &[PathBuf], out_dir: &Path, import: &ImportArgs) -> anyhow::Result<Vec<Job>> {
+    // Files named on the command line go straight into out_dir.
+    let mut direct: Vec<&Path> = Vec::new();
+    let mut jobs: Vec<Job> = Vec::new();
+    let mut folder_jobs: Vec<Job> = Vec::new();
+    for input in inputs {
+        if !input.is_dir() {
+            direct.push(input);
+            continue;
+        }
+        let mut files = Vec::new();
+        walk(input, 0, &mut files)?;
+        let mut models: Vec<(PathBuf, Format)> = Vec::new();
+        for f in &files {
+            let kind = match head(f) {
+                Ok(h) => FileKind::sniff(f, &h),
+                Err(_) => FileKind::Other,
+            };
+            if let FileKind::Model(format) = kind {
+                models.push((f.clone(), format));
+            }
+        }
+        let mut companions: BTreeSet<PathBuf> = BTreeSet::new();
+        for (f, format) in &models {
+            if *format == Format::Qc {
+                companions.extend(qc_companions(f, import));
+            }
+        }
+        models.retain(|(f, format)| *format == Format::Qc || !companions.contains(&normal(f)));
+        // Mirror the tree: group by folder, name within each folder.
+        let mut by_folder: BTreeMap<PathBuf, Vec<(PathBuf, Format)>> = BTreeMap::new();
+        for (f, format) in models {
+            let rel = f
+                .parent()
+                .and_then(|p| p.strip_prefix(input).ok())
+                .map(Path::to_path_buf)
+                .unwrap_or_default();
+            by_folder.entry(rel).or_default().push((f, format));
+        }
+        for (rel, list) in by_folder {
+            let paths: Vec<&Path> = list.iter().map(|(p, _)| p.as_path()).collect();
+            let names = names_in(&paths)?;
+            for ((f, format), name) in list.iter().zip(names) {
+                folder_jobs.push(Job {
+                    input: f.clone(),
+                    output: out_dir.join(&rel).join(name),
+                    format: Some(*format),
+                });
+            }
+        }
+    }
+    let names = names_in(&direct)?;
+    for (i, name) in direct.iter().zip(names) {
+        jobs.push(Job {
+            input: i.to_path_buf(),
+            output: out_dir.join(name),
+            format: None,
+        });
+    }
+    jobs.extend(folder_jobs);
+    let mut seen: HashMap<&Path, &Path> = HashMap::new();
+    for j in &jobs {
+        if let Some(prev) = seen.insert(&j.output, &j.input) {
+            bail!(
+                "{} and {} would both be written to {}",
+                prev.display(),
+                j.input.display(),
+                j.output.display()
+            );
+        }
+    }
+    Ok(jobs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folders_fold_companions_and_mirror_the_tree() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().join("in");
+        std::fs::create_dir_all(root.join("chars/man")).unwrap();
+        std::fs::create_dir_all(root.join("props")).unwrap();
+        // An MDL, its texture file (content: IDST with only textures) under a name that does not say so.
+        let mut mdl = vec![0u8; 244];
+        mdl[..4].copy_from_slice(b"IDST");
+        mdl[140..144].copy_from_slice(&1i32.to_le_bytes());
+        std::fs::write(root.join("chars/man/man.mdl"), &mdl).unwrap();
+        let mut tex = vec![0u8; 244];
+        tex[..4].copy_from_slice(b"IDST");
+        tex[180..184].copy_from_slice(&2i32.to_le_bytes());
+        std::fs::write(root.join("chars/man/skins.mdl"), &tex).unwrap();
+        std::fs::write(root.join("chars/man/man01.mdl"), b"IDSQ\x0a\0\0\0").unwrap();
+        // A QC and the SMDs it names; another SMD that no QC names.
+        std::fs::write(
+            root.join("props/box.qc"),
+            "$body b \"box_ref\"\n$sequence idle \"box_idle\"\n",
+        )
+        .unwrap();
+        std::fs::write(
+            root.join("props/box_ref.smd"),
+            "version 1\nnodes\n0 \"b\" -1\nend\n",
+        )
+        .unwrap();
+        std::fs::write(
+            root.join("props/box_idle.smd"),
+            "version 1\nnodes\n0 \"b\" -1\nend\n",
+        )
+        .unwrap();
+        std::fs::write(root.join("props/lone.smd"), "version 1\nnodes\nend\n").unwrap();
+        std::fs::write(root.join("props/notes.txt"), "hello").unwrap();
+        let out = dir.path().join("out");
+        let jobs = plan(std::slice::from_ref(&root), &out, &ImportArgs::default()).unwrap();
+        let got: Vec<(PathBuf, PathBuf, Option<Format>)> = jobs
+            .iter()
+            .map(|j| {
+                (
+                    j.input.strip_prefix(&root).unwrap().to_path_buf(),
+                    j.output.strip_prefix(&out).unwrap().to_path_buf(),
+                    j.format,
+                )
+            })
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (
+                    "chars/man/man.mdl".into(),
+                    "chars/man/man.sinew".into(),
+                    Some(Format::Mdl)
+                ),
+                (
+                    "props/box.qc".into(),
+                    "props/box.sinew".into(),
+                    Some(Format::Qc)
+                ),
+                (
+                    "props/lone.smd".into(),
+                    "props/lone.sinew".into(),
+                    Some(Format::Smd)
+                ),
+            ]
+        );
+    }
+}

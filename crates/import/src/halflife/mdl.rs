@@ -169,6 +169,22 @@ fn check_magic(f: &Bytes) -> Result<(), ImportError> {
     }
 }
 
+/// Checks the header's file length against the bytes present: a shorter file was cut off.
+fn check_length(f: &Bytes) -> Result<(), ImportError> {
+    let declared = f.i32("header", 72)?;
+    if declared < 0 || declared as usize > f.b.len() {
+        return Err(f.err(
+            "header",
+            72,
+            format!(
+                "truncated: the header says {declared} bytes, the file has {}",
+                f.b.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The companion file names of a model file: `<stem>T.mdl` and the sequence group files.
 pub fn texture_companion(file: &str) -> String {
     let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
@@ -185,6 +201,7 @@ pub fn read(
     let f = Bytes { file, b: bytes };
     check_magic(&f)?;
     f.get("header", 0, HEADER_SIZE)?;
+    check_length(&f)?;
     let mut diagnostics = Vec::new();
     let mut model = StudioModel::default();
     let eye = f.vec3("header", 76)?;
@@ -437,6 +454,7 @@ pub fn read(
             let t = Bytes { file: &tex_name, b };
             check_magic(&t)?;
             t.get("header", 0, HEADER_SIZE)?;
+            check_length(&t)?;
             t
         }
         None => Bytes { file, b: bytes },

@@ -14,3 +14,5 @@ mod state;
 
 pub use script::compile;
 pub use state::{activity_number, control, ACTIVITIES, MAX_BONES, MAX_FRAMES};
+#[cfg(test)]
+mod tests;

@@ -76,7 +76,7 @@ fn man_mdl_skeleton_meshes_and_companions() {
     // Pelvis default position y: f32 bits at bone 1, value[1] (file offset 244 + 112 + 68).
     assert_eq!(
         sk.bind_local()[1].translation,
-        Vec3::new(0.0, 4.052_455_9, 0.0)
+        Vec3::new(0.0, f32::from_bits(0x4081_ADB8), 0.0)
     );
     // Root default rotation: x = 1.5708 (90 degrees), y = -0, z = 0.
     let root = sk.bind_local()[0].rotation;
@@ -187,7 +187,7 @@ fn man_mdl_sequences_and_game_data() {
     // RightLeg x rotation at frame 5: default 1.570804 + 7561 x 1.3316206e-5.
     let rx = 1.570_804_f32 + 7561.0 * 1.331_620_6e-5;
     let q = walk.tracks[2].rotation.values[5];
-    let expected = Quat::from_euler(EulerRot::ZYX, -1.5708, 0.022_526, rx);
+    let expected = Quat::from_euler(EulerRot::ZYX, -std::f32::consts::FRAC_PI_2, 0.022_526, rx);
     let (_, _, got_x) = q.to_euler(EulerRot::ZYX);
     assert!(
         (got_x - rx).abs() < 1e-4 || q.angle_between(expected) < 1e-3,

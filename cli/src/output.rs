@@ -57,7 +57,8 @@ pub fn check_output_path(path: &Path) -> anyhow::Result<()> {
 }
 
 /// Writes `bytes` to `path` atomically: into a temporary file in the same directory, then renamed over
-/// `path`. A failure at any point leaves no file at `path` (and no temporary file behind).
+/// `path`. A failure at any point leaves no file at `path` (and no temporary file behind); other
+/// processes see the old file or the whole new one, never a part.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     check_output_path(path)?;
     let dir = match path.parent() {
@@ -68,8 +69,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         .prefix(".sinew-tmp-")
         .tempfile_in(dir)
         .with_context(|| format!("{}: creating a temporary file", path.display()))?;
+    // No fsync: the rename makes the file appear whole or not at all to every other process, which
+    // is the contract (docs/cli.md); surviving a power cut would cost a disk flush per file.
     tmp.write_all(bytes)
-        .and_then(|()| tmp.as_file().sync_all())
         .with_context(|| format!("{}: writing", path.display()))?;
     tmp.persist(path)
         .map_err(|e| e.error)

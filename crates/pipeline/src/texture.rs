@@ -41,6 +41,8 @@ pub fn encode_png(image: &Image) -> Result<Vec<u8>, String> {
         let mut enc = png::Encoder::new(&mut out, image.width, image.height);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
+        // fdeflate: several times faster than the default for a few percent more bytes.
+        enc.set_compression(png::Compression::Fast);
         let mut w = enc
             .write_header()
             .map_err(|e| format!("image {:?}: {e}", image.name))?;

@@ -118,7 +118,7 @@ pub fn parse(file: &str, bytes: &[u8]) -> Result<Smd, ImportError> {
             ),
         ));
     }
-    if p.int(n, &first[1], "a version number")? != 1 {
+    if p.int(n, first[1], "a version number")? != 1 {
         return Err(p.err(
             n,
             format!("version {} is not supported (SMD version 1 is)", first[1]),
@@ -147,8 +147,8 @@ pub fn parse(file: &str, bytes: &[u8]) -> Result<Smd, ImportError> {
                     if w.len() < 3 {
                         return Err(p.err(n, "a node needs `id \"name\" parent`"));
                     }
-                    let id = p.int(n, &w[0], "a node id")?;
-                    let parent = p.int(n, &w[w.len() - 1], "a parent id")?;
+                    let id = p.int(n, w[0], "a node id")?;
+                    let parent = p.int(n, w[w.len() - 1], "a parent id")?;
                     let (Ok(id), Ok(parent)) = (i32::try_from(id), i32::try_from(parent)) else {
                         return Err(p.err(n, "node id out of range"));
                     };
@@ -213,7 +213,7 @@ pub fn parse(file: &str, bytes: &[u8]) -> Result<Smd, ImportError> {
                         break;
                     }
                     if w[0].eq_ignore_ascii_case("time") {
-                        let t = p.int(n, w.get(1).map_or("", String::as_str), "a frame time")?;
+                        let t = p.int(n, w.get(1).copied().unwrap_or(""), "a frame time")?;
                         let t =
                             i32::try_from(t).map_err(|_| p.err(n, "frame time out of range"))?;
                         if !frames.contains_key(&t)
@@ -238,7 +238,7 @@ pub fn parse(file: &str, bytes: &[u8]) -> Result<Smd, ImportError> {
                     if w.len() < 7 {
                         return Err(p.err(n, "a bone line needs `id px py pz rx ry rz`"));
                     }
-                    let id = p.int(n, &w[0], "a node id")?;
+                    let id = p.int(n, w[0], "a node id")?;
                     let Some(&k) = i32::try_from(id).ok().and_then(|id| id_index.get(&id)) else {
                         return Err(p.err(n, format!("node id {id} is not declared in `nodes`")));
                     };
@@ -347,7 +347,7 @@ pub fn parse(file: &str, bytes: &[u8]) -> Result<Smd, ImportError> {
 fn vertex(
     p: &Parser,
     n: usize,
-    w: &[String],
+    w: &[&str],
     id_index: &HashMap<i32, usize>,
 ) -> Result<SmdVertex, ImportError> {
     if w.len() < 9 {
@@ -366,14 +366,14 @@ fn vertex(
             .and_then(|id| id_index.get(&id).copied())
             .ok_or_else(|| p.err(n, format!("bone id {id} is not declared in `nodes`")))
     };
-    let bone = bone_of(&w[0])?;
+    let bone = bone_of(w[0])?;
     let mut f = [0f32; 8];
     for (slot, tok) in f.iter_mut().zip(&w[1..9]) {
         *slot = p.num(n, tok)?;
     }
     let mut links = Vec::new();
     if w.len() > 9 {
-        let count = p.int(n, &w[9], "a link count")?;
+        let count = p.int(n, w[9], "a link count")?;
         let count =
             usize::try_from(count).map_err(|_| p.err(n, format!("negative link count {count}")))?;
         if w.len() != 10 + 2 * count.min(w.len()) {
@@ -387,8 +387,8 @@ fn vertex(
             ));
         }
         for k in 0..count {
-            let b = bone_of(&w[10 + 2 * k])?;
-            let weight = p.num(n, &w[11 + 2 * k])?;
+            let b = bone_of(w[10 + 2 * k])?;
+            let weight = p.num(n, w[11 + 2 * k])?;
             links.push((b, weight));
         }
     }

@@ -341,6 +341,7 @@ pub fn split(scene: &mut Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<
     let at: Vec<&str> = plan.at.iter().map(String::as_str).collect();
     let mut out_clips = Vec::new();
     let mut reports = Vec::new();
+    let mut game = scene.game.clone();
     for clip in &scene.clips {
         let mut made = Vec::new();
         if at.is_empty() {
@@ -357,6 +358,8 @@ pub fn split(scene: &mut Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<
             clip: clip.name.clone(),
             parts: made.iter().map(part).collect(),
         });
+        let names: Vec<String> = made.iter().map(|c| c.name.clone()).collect();
+        split::carry_game_data(&mut game, &clip.name, &names, at.is_empty());
         out_clips.extend(made);
     }
     let mut seen = std::collections::HashSet::new();
@@ -366,6 +369,7 @@ pub fn split(scene: &mut Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<
         }
     }
     scene.clips = out_clips;
+    scene.game = game;
     add_masks(scene, &skel, plan, file)?;
     Ok(reports)
 }

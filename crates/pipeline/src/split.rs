@@ -160,3 +160,26 @@ pub fn clip_for_mask(
         |j| mask.joints.iter().any(|m| m == j),
     ))
 }
+/// Gives the clips made from `source` the source's game data (activity, events, motion, blend), so a
+/// split Half-Life sequence keeps them; the source's record is dropped unless `keep_source`.
+pub fn carry_game_data(
+    game: &mut sinew_scene::GameData,
+    source: &str,
+    made: &[String],
+    keep_source: bool,
+) {
+    let Some(at) = game.clips.iter().position(|c| c.clip == source) else {
+        return;
+    };
+    let record = if keep_source {
+        game.clips[at].clone()
+    } else {
+        game.clips.remove(at)
+    };
+    for (k, name) in made.iter().enumerate() {
+        let mut r = record.clone();
+        r.clip = name.clone();
+        game.clips
+            .insert((at + k + usize::from(keep_source)).min(game.clips.len()), r);
+    }
+}

@@ -181,3 +181,42 @@ fn masks() {
         );
     }
 }
+
+#[test]
+fn split_clips_carry_their_game_data() {
+    use sinew_scene::game::{ClipEvent, ClipGameData};
+    use sinew_scene::GameData;
+    let walk = ClipGameData {
+        clip: "walk".into(),
+        activity: 3,
+        events: vec![ClipEvent {
+            frame: 13,
+            event: 1004,
+            kind: 0,
+            options: "step.wav".into(),
+        }],
+        ..ClipGameData::default()
+    };
+    let idle = ClipGameData {
+        clip: "idle".into(),
+        activity: 1,
+        ..ClipGameData::default()
+    };
+    let mut g = GameData {
+        clips: vec![walk.clone(), idle.clone()],
+        ..GameData::default()
+    };
+    let made = ["walk.upper".to_string(), "walk.lower".to_string()];
+    sinew_pipeline::split::carry_game_data(&mut g, "walk", &made, false);
+    let names: Vec<&str> = g.clips.iter().map(|c| c.clip.as_str()).collect();
+    assert_eq!(names, ["walk.upper", "walk.lower", "idle"]);
+    assert_eq!(g.clips[1].events, walk.events);
+    assert_eq!(g.clips[1].activity, 3);
+    // With the source kept (masks only), the copies follow it.
+    sinew_pipeline::split::carry_game_data(&mut g, "idle", &["idle.arms".to_string()], true);
+    let names: Vec<&str> = g.clips.iter().map(|c| c.clip.as_str()).collect();
+    assert_eq!(names, ["walk.upper", "walk.lower", "idle", "idle.arms"]);
+    // A clip without game data changes nothing.
+    sinew_pipeline::split::carry_game_data(&mut g, "run", &["run.upper".to_string()], false);
+    assert_eq!(g.clips.len(), 4);
+}

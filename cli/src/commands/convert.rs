@@ -15,7 +15,6 @@ use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
-use rayon::prelude::*;
 use sinew_pipeline::compile::{CompileOptions, CompileReport};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
@@ -275,10 +274,21 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         .num_threads(args.jobs.unwrap_or(0))
         .build()
         .map_err(|e| anyhow!("--jobs: cannot start worker threads: {e}"))?;
-    let files: Vec<FileReport> = pool.install(|| {
-        jobs.par_iter()
-            .map(|job| {
-                let (input, output) = (&job.input, &job.output);
+    // Largest inputs first (by file size), each worker taking the next job when it is free, so one
+    // long file starts early instead of serialising the end of the batch. Reports keep input order.
+    let order = largest_first(&jobs);
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let slots: Vec<std::sync::Mutex<Option<FileReport>>> =
+        jobs.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    let workers = pool.current_num_threads().min(jobs.len()).max(1);
+    pool.scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|_| loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(&i) = order.get(k) else {
+                    break;
+                };
+                let job = &jobs[i];
                 let result = convert_one(job, &plan);
                 if let Some(b) = &bar {
                     b.inc(1);
@@ -287,16 +297,32 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
                     Ok(d) => ("converted", None, Some(d)),
                     Err(e) => ("failed", Some(crate::output::one_line(&e)), None),
                 };
-                FileReport {
-                    input: input.display().to_string(),
-                    output: output.display().to_string(),
+                let report = FileReport {
+                    input: job.input.display().to_string(),
+                    output: job.output.display().to_string(),
                     status,
                     error,
                     details,
+                };
+                if let Ok(mut slot) = slots[i].lock() {
+                    *slot = Some(report);
                 }
-            })
-            .collect()
+            });
+        }
     });
+    let files: Vec<FileReport> = slots
+        .into_iter()
+        .zip(&jobs)
+        .map(|(slot, job)| {
+            slot.into_inner().ok().flatten().unwrap_or_else(|| FileReport {
+                input: job.input.display().to_string(),
+                output: job.output.display().to_string(),
+                status: "failed",
+                error: Some(format!("{}: the worker converting it stopped", job.input.display())),
+                details: None,
+            })
+        })
+        .collect();
     if let Some(b) = bar {
         b.finish_and_clear();
     }
@@ -324,6 +350,16 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         return Ok(Status::CheckFailed);
     }
     Ok(Status::Success)
+}
+
+/// Job indices, largest input file first (ties keep input order): the longest-processing-time-first
+/// rule, which keeps one long file from running alone at the end of a batch.
+fn largest_first(jobs: &[Job]) -> Vec<usize> {
+    let size = |j: &Job| std::fs::metadata(&j.input).map_or(0, |m| m.len());
+    let sizes: Vec<u64> = jobs.iter().map(size).collect();
+    let mut order: Vec<usize> = (0..jobs.len()).collect();
+    order.sort_by(|&a, &b| sizes[b].cmp(&sizes[a]).then(a.cmp(&b)));
+    order
 }
 
 fn emit(report: &ConvertReport, ctx: &Ctx) -> anyhow::Result<()> {

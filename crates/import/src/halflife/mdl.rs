@@ -642,13 +642,7 @@ fn decode_channel(
                 format!("animation run with {valid} values over {total} frames"),
             ));
         }
-        if valid > total {
-            return Err(data.err(
-                section,
-                at,
-                format!("animation run with {valid} values over only {total} frames"),
-            ));
-        }
+        // More values than frames: the engine reads the first `total` and skips the rest; so does this.
         if out.len() + total > frames {
             return Err(data.err(
                 section,

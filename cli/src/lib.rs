@@ -37,6 +37,7 @@ pub fn main_entry() -> ExitCode {
     let ctx = output::Ctx {
         json: args.global.json,
         quiet: args.global.quiet,
+        capture: None,
     };
     match commands::run(args.command, &ctx) {
         Ok(Status::Success) => ExitCode::SUCCESS,
@@ -45,5 +46,78 @@ pub fn main_entry() -> ExitCode {
             eprintln!("sinew: error: {}", output::one_line(&err));
             ExitCode::from(2)
         }
+    }
+}
+
+/// What [`run_captured`] returns: the exit code the command would have, its JSON report, or its
+/// one-line error.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Captured {
+    /// 0 success, 1 a check failed (or one file of a batch), 2 bad input or usage.
+    pub code: u8,
+    /// The JSON report (as `--json` prints it), when the command got as far as reporting.
+    pub json: Option<String>,
+    /// The error line (as printed after `sinew: error: `), for exit code 2.
+    pub error: Option<String>,
+    /// True when the arguments themselves were refused (unknown option, bad value) before any work.
+    pub usage: bool,
+}
+
+/// Runs a command from its arguments (without the program name, e.g. `["convert", "a.ms3d", "-o",
+/// "a.sinew"]`) as the `sinew` binary would, with `--json`, but returns the report instead of
+/// printing it and writes nothing on stderr. Library callers (the Python package) use this, so they
+/// get the same options, checks, outputs and report as the command line.
+pub fn run_captured<I, S>(argv: I) -> Captured
+where
+    I: IntoIterator<Item = S>,
+    S: Into<std::ffi::OsString> + Clone,
+{
+    let args =
+        std::iter::once(std::ffi::OsString::from("sinew")).chain(argv.into_iter().map(Into::into));
+    let args = match cli::Cli::try_parse_from(args) {
+        Ok(a) => a,
+        Err(e) => {
+            let text = e.to_string();
+            let line = text
+                .lines()
+                .find(|l| !l.trim().is_empty())
+                .unwrap_or("bad arguments")
+                .trim_start_matches("error: ")
+                .to_string();
+            return Captured {
+                code: 2,
+                json: None,
+                error: Some(line),
+                usage: true,
+            };
+        }
+    };
+    let store = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let ctx = output::Ctx {
+        json: true,
+        quiet: true,
+        capture: Some(store.clone()),
+    };
+    let result = commands::run(args.command, &ctx);
+    let json = store.lock().ok().and_then(|mut v| v.pop());
+    match result {
+        Ok(Status::Success) => Captured {
+            code: 0,
+            json,
+            error: None,
+            usage: false,
+        },
+        Ok(Status::CheckFailed) => Captured {
+            code: 1,
+            json,
+            error: None,
+            usage: false,
+        },
+        Err(err) => Captured {
+            code: 2,
+            json: None,
+            error: Some(output::one_line(&err)),
+            usage: false,
+        },
     }
 }

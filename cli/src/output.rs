@@ -6,18 +6,40 @@ use std::io::Write;
 use std::path::Path;
 
 /// The global output settings of one run.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Ctx {
     /// `--json`: print the report as JSON on stdout, no human report.
     pub json: bool,
     /// `--quiet`: nothing on stderr but errors.
     pub quiet: bool,
+    /// When set (library use, e.g. the Python package), JSON reports are collected here instead of
+    /// printed, and nothing is written on stderr.
+    pub capture: Option<std::sync::Arc<std::sync::Mutex<Vec<String>>>>,
 }
 
 impl Ctx {
     /// Whether the human-readable report should be written (to stderr).
     pub fn human(&self) -> bool {
-        !self.json && !self.quiet
+        !self.json && !self.quiet && self.capture.is_none()
+    }
+
+    /// Whether errors of single files in a batch may be printed on stderr.
+    pub fn stderr(&self) -> bool {
+        self.capture.is_none()
+    }
+
+    /// The JSON report: printed on stdout, or kept when capturing.
+    pub fn emit_json<T: Serialize>(&self, report: &T) -> anyhow::Result<()> {
+        match &self.capture {
+            Some(c) => {
+                let text = serde_json::to_string(report).context("encoding the JSON report")?;
+                if let Ok(mut list) = c.lock() {
+                    list.push(text);
+                }
+                Ok(())
+            }
+            None => print_json(report),
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! its JSON sidecar and the matching mesh as OBJ.
 
 use crate::cli::{BakeArgs, CacheFormatArg, NormalsArg, VatEncodingArg, VertexOrderArg};
-use crate::output::{check_output_path, print_json, write_atomic, Ctx};
+use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::Status;
 use anyhow::{bail, Context};
 use sinew_core::format::{self, Asset};
@@ -133,7 +133,7 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         sidecar: &encoded.sidecar,
     };
     if ctx.json {
-        print_json(&report)?;
+        ctx.emit_json(&report)?;
     } else if ctx.human() {
         let s = &encoded.sidecar;
         eprintln!(

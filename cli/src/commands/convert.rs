@@ -6,7 +6,7 @@
 
 use crate::batch::{self, Job};
 use crate::cli::ConvertArgs;
-use crate::output::{check_output_path, print_json, write_atomic, Ctx};
+use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::report::{
     clip_report, diag_report, mesh_report, num, ClipOut, ConvertReport, FileReport, MeshOut,
     OutputDetails,
@@ -314,13 +314,19 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         .into_iter()
         .zip(&jobs)
         .map(|(slot, job)| {
-            slot.into_inner().ok().flatten().unwrap_or_else(|| FileReport {
-                input: job.input.display().to_string(),
-                output: job.output.display().to_string(),
-                status: "failed",
-                error: Some(format!("{}: the worker converting it stopped", job.input.display())),
-                details: None,
-            })
+            slot.into_inner()
+                .ok()
+                .flatten()
+                .unwrap_or_else(|| FileReport {
+                    input: job.input.display().to_string(),
+                    output: job.output.display().to_string(),
+                    status: "failed",
+                    error: Some(format!(
+                        "{}: the worker converting it stopped",
+                        job.input.display()
+                    )),
+                    details: None,
+                })
         })
         .collect();
     if let Some(b) = bar {
@@ -334,14 +340,15 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         files,
     };
     emit(&report, ctx)?;
-    // Failures are errors: listed on stderr even with --quiet or --json.
+    // Failures are errors: listed on stderr even with --quiet or --json (not when a library caller
+    // collects the report: they are in it).
     for f in &report.files {
-        if let Some(e) = &f.error {
+        if let (Some(e), true) = (&f.error, ctx.stderr()) {
             eprintln!("sinew: error: {e}");
         }
     }
     if failed > 0 {
-        if !ctx.quiet {
+        if !ctx.quiet && ctx.stderr() {
             eprintln!(
                 "sinew: {failed} of {} files failed; {} converted",
                 report.inputs, report.converted
@@ -364,7 +371,7 @@ fn largest_first(jobs: &[Job]) -> Vec<usize> {
 
 fn emit(report: &ConvertReport, ctx: &Ctx) -> anyhow::Result<()> {
     if ctx.json {
-        print_json(report)?;
+        ctx.emit_json(report)?;
     } else if ctx.human() {
         for f in &report.files {
             if let Some(d) = &f.details {
@@ -386,7 +393,7 @@ pub fn emit_one(input: &str, output: &Path, d: OutputDetails, ctx: &Ctx) -> anyh
         details: Some(d),
     };
     if ctx.json {
-        print_json(&f)?;
+        ctx.emit_json(&f)?;
     } else if ctx.human() {
         if let Some(d) = &f.details {
             eprint!("{}", human_details(&f.input, &f.output, d));

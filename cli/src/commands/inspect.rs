@@ -4,7 +4,7 @@
 //! docs/cli.md. Add fields, never rename or remove them.
 
 use crate::cli::InspectArgs;
-use crate::output::{print_json, Ctx};
+use crate::output::Ctx;
 use crate::report::human;
 use crate::report::SectionReport;
 use crate::report::{add_encodings, build_report};
@@ -37,7 +37,7 @@ pub fn run(args: &InspectArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         }
     }
     if ctx.json {
-        print_json(&report)?;
+        ctx.emit_json(&report)?;
     } else if ctx.human() {
         eprint!("{}", human(&report));
     }

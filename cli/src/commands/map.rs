@@ -2,7 +2,7 @@
 //! ([`crate::report::MappingReport`]), optionally saved as a mapping file for `convert --map`.
 
 use crate::cli::MapArgs;
-use crate::output::{print_json, write_atomic, Ctx};
+use crate::output::{write_atomic, Ctx};
 use crate::report::MappingReport;
 use crate::steps::{self, MappingFile};
 use crate::Status;
@@ -36,7 +36,7 @@ pub fn run(args: &MapArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     }
     let report = steps::mapping_report(&mapping);
     if ctx.json {
-        print_json(&report)?;
+        ctx.emit_json(&report)?;
     } else if ctx.human() {
         eprint!("{}", human(&report));
         if let Some(w) = &args.write {

@@ -1,7 +1,7 @@
 //! `sinew verify`: re-bake a cache with sinew-core using its sidecar's parameters and compare bits.
 
 use crate::cli::VerifyArgs;
-use crate::output::{print_json, Ctx};
+use crate::output::Ctx;
 use crate::Status;
 use anyhow::{bail, Context};
 use sinew_pipeline::verify::{self, CacheFormat, NormalsPlacement, Sidecar, VerifyReport};
@@ -61,13 +61,13 @@ pub fn run(args: &VerifyArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let report = verify::verify(&asset, &sidecar, &cache, normals.as_deref())
         .with_context(|| format!("{cache_shown}"))?;
     if ctx.json {
-        print_json(&Report {
+        ctx.emit_json(&Report {
             cache: cache_shown.to_string(),
             against: args.against.display().to_string(),
             identical: report.identical(),
             report: &report,
         })?;
-    } else if ctx.human() || !report.identical() {
+    } else if ctx.human() || (!report.identical() && ctx.stderr()) {
         match &report.first {
             None => eprintln!(
                 "{cache_shown}: identical to the runtime ({} frames x {} vertices, {} vectors compared)",

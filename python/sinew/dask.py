@@ -1,0 +1,113 @@
+"""Batches past one machine: ``convert_many`` runs one ``sinew convert`` task per model on a Dask
+cluster (``dask.distributed``), largest inputs first.
+
+Each task converts one file where its worker runs and writes its output atomically there (shared
+storage between the machines is the caller's, see docs/scale.md). A failing file fails its own entry
+only. The result has one entry per input, in input order, with the fields of the command line's batch
+report (``input``, ``output``, ``status``, ``error`` and, when converted, what was written); the
+bytes are those a local ``sinew convert`` writes for the same options.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any, Iterable, List, Optional
+
+from . import _options, _sinew
+
+__all__ = ["convert_many", "plan"]
+
+
+def plan(paths: Iterable[Any], out_dir: Any) -> List[tuple]:
+    """``(input, output)`` pairs as ``sinew convert PATHS --out-dir OUT_DIR`` names them: a file
+    becomes ``OUT_DIR/<stem>.sinew`` (``<file name>.sinew`` when stems collide)."""
+    paths = [os.fspath(p) for p in paths]
+    stems: dict = {}
+    for p in paths:
+        stem = os.path.splitext(os.path.basename(p))[0]
+        stems[stem] = stems.get(stem, 0) + 1
+    out = []
+    for p in paths:
+        base = os.path.basename(p)
+        stem = os.path.splitext(base)[0]
+        name = (base if stems[stem] > 1 else stem) + ".sinew"
+        out.append((p, os.path.join(os.fspath(out_dir), name)))
+    return out
+
+
+def _convert_task(src: str, out: str, args: List[str]) -> dict:
+    """One task: ``sinew convert SRC -o OUT ARGS`` on the worker; never raises for a bad file."""
+    parent = os.path.dirname(out)
+    if parent:
+        os.makedirs(parent, exist_ok=True)
+    crash_marker = os.environ.get("SINEW_TEST_CRASH_ONCE")
+    if crash_marker and os.path.basename(src) in os.environ.get("SINEW_TEST_CRASH_FILE", ""):
+        # Test hook (python/tests): the first attempt kills its worker process, to show that Dask
+        # runs the task again elsewhere.
+        try:
+            fd = os.open(crash_marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            os.close(fd)
+            os._exit(3)
+        except FileExistsError:
+            pass
+    code, report, error, _ = _sinew.run(["convert", src, "-o", out, *args])
+    if code == 0 and report:
+        import json
+
+        return json.loads(report)["files"][0]
+    return {"input": src, "output": out, "status": "failed", "error": error or "failed"}
+
+
+def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = None,
+                 progress: bool = False, retries: int = 2, **options: Any) -> List[dict]:
+    """Converts every file of ``paths`` into ``out_dir`` on a Dask cluster.
+
+    ``client``: a ``dask.distributed.Client``; without one a ``LocalCluster`` is started for the call
+    and closed after it. Tasks are submitted largest input first, one per file; a worker that dies
+    has its task run again (``retries`` more times for tasks that raise). ``progress=True`` shows
+    Dask's own progress bar (notebooks and terminals). ``options`` are ``convert``'s (see
+    :func:`sinew.convert`). Returns one dict per input, in input order.
+    """
+    from dask.distributed import Client, LocalCluster
+
+    pairs = plan(paths, out_dir)
+    args = _options(options)
+    own = client is None
+    cluster = None
+    if own:
+        cluster = LocalCluster(processes=True, dashboard_address=None)
+        client = Client(cluster)
+    try:
+        def size(p: str) -> int:
+            try:
+                return os.path.getsize(p)
+            except OSError:
+                return 0
+
+        order = sorted(range(len(pairs)), key=lambda i: (-size(pairs[i][0]), i))
+        futures = {}
+        for i in order:
+            src, out = pairs[i]
+            futures[i] = client.submit(_convert_task, src, out, args, key=f"sinew-convert-{i}-{os.path.basename(src)}",
+                                       pure=False, retries=retries)
+        if progress:
+            from dask.distributed import progress as show_progress
+
+            show_progress(list(futures.values()))
+        results = client.gather([futures[i] for i in range(len(pairs))], errors="skip")
+        gathered = {}
+        done = [futures[i] for i in range(len(pairs))]
+        for i, f in enumerate(done):
+            if f.status == "finished":
+                gathered[i] = f.result()
+            else:
+                src, out = pairs[i]
+                gathered[i] = {"input": src, "output": out, "status": "failed",
+                               "error": f"{src}: the task failed on the cluster ({f.status})"}
+        del results
+        return [gathered[i] for i in range(len(pairs))]
+    finally:
+        if own:
+            client.close()
+            if cluster is not None:
+                cluster.close()

@@ -87,8 +87,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
-    let mut tmp = tempfile::Builder::new()
-        .prefix(".sinew-tmp-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".sinew-tmp-");
+    // Created like any new file (mode 0666 less the umask: 0644 under the usual 022), so that the
+    // rename leaves the permissions `cp` or a compiler would give; tempfile's default is 0600.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder
         .tempfile_in(dir)
         .with_context(|| format!("{}: creating a temporary file", path.display()))?;
     // No fsync: the rename makes the file appear whole or not at all to every other process, which
@@ -117,6 +125,21 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("a.bin")]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn written_files_get_the_mode_a_new_file_gets() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.bin");
+        write_atomic(&out, b"x").unwrap();
+        // The mode a plain new file gets here (0666 less this process's umask).
+        let probe = dir.path().join("probe");
+        std::fs::write(&probe, b"x").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&out), mode(&probe));
+        assert_ne!(mode(&out), 0o600, "umask 0177 would be unusual here");
     }
 
     #[test]

@@ -13,6 +13,7 @@
 pub mod bvh;
 pub mod error;
 pub mod gltf;
+mod guard;
 pub mod halflife;
 pub mod ms3d;
 pub mod obj;

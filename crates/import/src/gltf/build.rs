@@ -14,16 +14,13 @@ pub fn import(
     resolve: Resolver<'_>,
     options: &ImportOptions,
 ) -> Result<Scene, ImportError> {
-    // The gltf crate's typed accessors unwrap values its validation does not always cover; a panic
-    // there becomes an ordinary error instead of aborting a batch run.
-    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        import_inner(file_name, bytes, resolve, options)
-    }))
-    .unwrap_or_else(|_| {
+    // Last resort: our own checks (`refs`) run before the gltf crate's, but should the crate still
+    // panic on something they miss, the file fails with an ordinary error and nothing is printed.
+    crate::guard::contain(|| import_inner(file_name, bytes, resolve, options)).unwrap_or_else(|m| {
         Err(ImportError::in_section(
             file_name,
             "json",
-            "the document holds a value the gltf crate could not interpret",
+            format!("the gltf crate could not interpret the document ({m})"),
         ))
     })
 }

@@ -176,8 +176,17 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, Impo
     if json.starts_with(b"glTF") {
         return Err(ImportError::in_section(file, "json", "nested GLB header"));
     }
-    let parsed = std::panic::catch_unwind(|| gltf::Gltf::from_slice(json)).map_err(|_| {
-        ImportError::in_section(file, "json", "the gltf crate panicked while validating")
+    // Our own pass first: indices the crate follows and enumerations it unwraps, which gltf-json
+    // 1.4.1 can panic on instead of reporting (docs/reliability.md).
+    if let Ok(value) = serde_json::from_slice::<serde_json::Value>(json) {
+        super::refs::check(&value).map_err(|(path, message)| at(file, path, message))?;
+    }
+    let parsed = crate::guard::contain(|| gltf::Gltf::from_slice(json)).map_err(|m| {
+        ImportError::in_section(
+            file,
+            "json",
+            format!("the gltf crate panicked while validating ({m})"),
+        )
     })?;
     parsed.map_err(|e| match e {
         gltf::Error::Deserialize(de) => {

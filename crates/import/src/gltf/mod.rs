@@ -11,6 +11,7 @@ mod animation;
 mod build;
 mod document;
 mod mesh;
+mod refs;
 mod skin;
 
 pub use build::import;

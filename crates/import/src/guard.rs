@@ -2,6 +2,9 @@
 //! message instead of ending the process or a batch, and prints nothing (the error is reported once,
 //! as a one-line error naming the file). Panics outside a guarded call print as usual.
 
+// Fuzz builds use only the pass-through `contain`.
+#![cfg_attr(fuzzing, allow(dead_code, unused_imports))]
+
 use std::cell::{Cell, RefCell};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Once;
@@ -14,6 +17,16 @@ thread_local! {
 static HOOK: Once = Once::new();
 
 /// Runs `f`; a panic inside it is caught and returned as its message.
+///
+/// Fuzz builds (`--cfg fuzzing`, fuzz/run) let the panic through, so that the fuzzer reports every
+/// input that reaches a dependency's panic, contained or not.
+#[cfg(fuzzing)]
+pub(crate) fn contain<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    Ok(f())
+}
+
+/// Runs `f`; a panic inside it is caught and returned as its message.
+#[cfg(not(fuzzing))]
 pub(crate) fn contain<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     HOOK.call_once(|| {
         let previous = std::panic::take_hook();
@@ -41,7 +54,7 @@ pub(crate) fn contain<T>(f: impl FnOnce() -> T) -> Result<T, String> {
     })
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(fuzzing)))]
 mod tests {
     use super::*;
 

@@ -4,6 +4,7 @@
 //! vertex, in a vertex order the caller chose. Writers produce bytes (the caller writes them atomically);
 //! readers take untrusted bytes and check every count against the bytes present.
 
+mod exr_header;
 pub mod mdd;
 pub mod pc2;
 pub mod vat;

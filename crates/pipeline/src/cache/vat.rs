@@ -194,6 +194,7 @@ pub struct ReadLayer {
 
 /// Reads every layer of an EXR file (through the exr crate's reader).
 pub fn read_exr(bytes: &[u8]) -> Result<Vec<ReadLayer>, CacheError> {
+    super::exr_header::check_declared_size(bytes)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

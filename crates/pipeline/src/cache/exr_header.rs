@@ -1,0 +1,254 @@
+//! How many bytes an EXR file's pixels declare, read from its headers before the exr crate sees the
+//! file: the crate sizes its buffers from the header, so a 27 KB file whose data window says
+//! 1,073,741,824 pixels wide made it ask for 1.5 GB (docs/reliability.md). A file whose pixels would
+//! take more than any compression could have packed into the bytes present is refused here.
+
+use super::{cache_error, CacheError};
+
+const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// Version-field flags: long names, deep data, multi-part.
+const LONG_NAMES: u32 = 0x400;
+const DEEP: u32 = 0x800;
+const MULTI_PART: u32 = 0x1000;
+
+/// The most a chunk's pixels can expand over its stored bytes, by EXR compression code: none 1,
+/// RLE 64 (two bytes per run of up to 128), ZIPS/ZIP/PIZ deflate's 1,032, PXR24 (deflate of 24-bit
+/// values) 1,032 x 4/3, B44/B44A 32 bytes from 6 at best, DWAA/DWAB not bounded here (deflate's bound
+/// times 4 is allowed).
+fn expansion(compression: u8) -> u64 {
+    match compression {
+        0 => 1,
+        1 => 64,
+        2..=4 => 1032,
+        5 => 1376,
+        6 | 7 => 6,
+        _ => 4128,
+    }
+}
+
+struct Cursor<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl Cursor<'_> {
+    fn fail(&self, message: impl Into<String>) -> CacheError {
+        cache_error("exr", "header", self.at as u64, message)
+    }
+
+    fn take(&mut self, n: usize) -> Result<&[u8], CacheError> {
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or_else(|| self.fail("header runs past the end of the file"))?;
+        let out = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(out)
+    }
+
+    fn u32(&mut self) -> Result<u32, CacheError> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    fn i32(&mut self) -> Result<i32, CacheError> {
+        Ok(self.u32()? as i32)
+    }
+
+    /// A null-terminated name (at most 255 bytes with long names, 31 without); empty ends a list.
+    fn name(&mut self, max: usize) -> Result<&[u8], CacheError> {
+        let rest = &self.bytes[self.at..];
+        let len = rest
+            .iter()
+            .take(max + 1)
+            .position(|&b| b == 0)
+            .ok_or_else(|| self.fail("name not terminated"))?;
+        let out = &self.bytes[self.at..self.at + len];
+        self.at += len + 1;
+        Ok(out)
+    }
+}
+
+/// One part's header: data window area, bytes per pixel over its channels, compression.
+struct Part {
+    pixels: u64,
+    bytes_per_pixel: u64,
+    compression: u8,
+}
+
+fn read_part(c: &mut Cursor<'_>, max_name: usize) -> Result<Option<Part>, CacheError> {
+    let mut window: Option<u64> = None;
+    let mut bytes_per_pixel = 0u64;
+    let mut compression = 0u8;
+    let mut any = false;
+    loop {
+        let name = c.name(max_name)?.to_vec();
+        if name.is_empty() {
+            break;
+        }
+        any = true;
+        c.name(max_name)?; // type
+        let size = c.i32()?;
+        let size = usize::try_from(size).map_err(|_| c.fail("negative attribute size"))?;
+        let start = c.at;
+        let value = c.take(size)?;
+        match name.as_slice() {
+            b"dataWindow" => {
+                let v = |i: usize| -> Result<i64, CacheError> {
+                    value
+                        .get(i * 4..i * 4 + 4)
+                        .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as i64)
+                        .ok_or_else(|| cache_error("exr", "header", start as u64, "short box2i"))
+                };
+                let (x0, y0, x1, y1) = (v(0)?, v(1)?, v(2)?, v(3)?);
+                if x1 < x0 || y1 < y0 {
+                    return Err(cache_error(
+                        "exr",
+                        "header",
+                        start as u64,
+                        format!("data window ({x0}, {y0})..({x1}, {y1}) is empty or inverted"),
+                    ));
+                }
+                window = Some(((x1 - x0 + 1) as u64) * ((y1 - y0 + 1) as u64));
+            }
+            b"channels" => {
+                let mut ch = Cursor {
+                    bytes: value,
+                    at: 0,
+                };
+                loop {
+                    if ch.name(max_name)?.is_empty() {
+                        break;
+                    }
+                    let kind = ch.u32()?;
+                    ch.take(4)?; // pLinear, reserved
+                    ch.take(8)?; // x and y sampling
+                    bytes_per_pixel += if kind == 1 { 2 } else { 4 };
+                }
+            }
+            b"compression" => compression = value.first().copied().unwrap_or(0),
+            _ => {}
+        }
+    }
+    if !any {
+        return Ok(None);
+    }
+    let pixels = window.ok_or_else(|| c.fail("a part without a dataWindow"))?;
+    Ok(Some(Part {
+        pixels,
+        bytes_per_pixel,
+        compression,
+    }))
+}
+
+/// Checks that the pixels the headers declare could have been stored in `bytes`; returns the
+/// declared pixel bytes of all parts.
+pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
+    let mut c = Cursor { bytes, at: 0 };
+    if c.take(4)? != MAGIC {
+        return Err(cache_error("exr", "header", 0, "not an OpenEXR file"));
+    }
+    let version = c.u32()?;
+    if version & DEEP != 0 {
+        return Err(cache_error("exr", "header", 4, "deep data is not a cache"));
+    }
+    let max_name = if version & LONG_NAMES != 0 { 255 } else { 31 };
+    let multi = version & MULTI_PART != 0;
+    let mut declared = 0u64;
+    let mut parts = 0;
+    while let Some(part) = read_part(&mut c, max_name)? {
+        parts += 1;
+        let bytes_of_part = part.pixels.saturating_mul(part.bytes_per_pixel);
+        declared = declared.saturating_add(bytes_of_part);
+        let limit = (bytes.len() as u64).saturating_mul(expansion(part.compression));
+        if declared > limit {
+            return Err(cache_error(
+                "exr",
+                "header",
+                8,
+                format!(
+                    "the headers declare {declared} bytes of pixels, more than {} bytes could hold \
+                     with compression {}",
+                    bytes.len(),
+                    part.compression
+                ),
+            ));
+        }
+        if !multi {
+            break;
+        }
+    }
+    if parts == 0 {
+        return Err(cache_error("exr", "header", 8, "no part in the file"));
+    }
+    Ok(declared)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A single-part scanline header: `width` x `height`, channels R, G, B as f32, ZIP16 (code 3).
+    fn header(width: i32, height: i32) -> Vec<u8> {
+        let mut b = MAGIC.to_vec();
+        b.extend_from_slice(&2u32.to_le_bytes());
+        let mut attr = |name: &str, kind: &str, value: &[u8]| {
+            b.extend_from_slice(name.as_bytes());
+            b.push(0);
+            b.extend_from_slice(kind.as_bytes());
+            b.push(0);
+            b.extend_from_slice(&(value.len() as i32).to_le_bytes());
+            b.extend_from_slice(value);
+        };
+        let mut ch = Vec::new();
+        for n in ["B", "G", "R"] {
+            ch.extend_from_slice(n.as_bytes());
+            ch.push(0);
+            ch.extend_from_slice(&2u32.to_le_bytes());
+            ch.extend_from_slice(&[0; 4]);
+            ch.extend_from_slice(&1i32.to_le_bytes());
+            ch.extend_from_slice(&1i32.to_le_bytes());
+        }
+        ch.push(0);
+        attr("channels", "chlist", &ch);
+        attr("compression", "compression", &[3]);
+        let mut w = Vec::new();
+        for v in [0, 0, width - 1, height - 1] {
+            w.extend_from_slice(&v.to_le_bytes());
+        }
+        attr("dataWindow", "box2i", &w);
+        b.push(0);
+        b
+    }
+
+    #[test]
+    fn declared_bytes_are_width_height_and_channels() {
+        let mut file = header(64, 32);
+        file.resize(4096, 0);
+        assert_eq!(check_declared_size(&file).unwrap(), 64 * 32 * 3 * 4);
+    }
+
+    #[test]
+    fn a_window_no_compression_could_fill_is_refused() {
+        // 4096 bytes of ZIP can hold at most 4096 * 1032 bytes of pixels.
+        let mut file = header(1 << 20, 1 << 10);
+        file.resize(4096, 0);
+        let e = check_declared_size(&file).unwrap_err();
+        assert!(e.message.contains("12884901888 bytes"), "{e}");
+        let mut inverted = header(0, 10);
+        inverted.resize(4096, 0);
+        assert!(check_declared_size(&inverted)
+            .unwrap_err()
+            .message
+            .contains("inverted"));
+    }
+
+    #[test]
+    fn truncated_headers_are_errors() {
+        let file = header(8, 8);
+        for n in 0..file.len() {
+            assert!(check_declared_size(&file[..n]).is_err(), "{n}");
+        }
+    }
+}

@@ -191,6 +191,9 @@ pub struct ConvertArgs {
     /// Retarget --anim motion: transfer rotations as changes from the motion's rest pose.
     #[arg(long)]
     pub retarget: bool,
+    /// With --retarget: factor for the root's translation instead of the ratio of hip heights.
+    #[arg(long, value_name = "K", requires = "retarget")]
+    pub root_scale: Option<f32>,
     /// Cut the model's single timeline into named clips by frame (`walk=1-30,run=31-50`).
     #[arg(long, value_name = "NAME=A-B,...")]
     pub clips: Option<String>,

@@ -36,7 +36,7 @@ pub struct GlobalArgs {
 pub enum Command {
     /// Show what a file holds: skeleton tree, clips, meshes, LODs, diagnostics.
     #[command(
-        after_help = "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect zombie.ms3d --ms3d-position-keys viewer\n  sinew inspect Fox.glb --json | jq '.clips[].name'"
+        after_help = "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect zombie.ms3d --ms3d-position-keys viewer\n  sinew inspect Fox.glb --json | jq '.clips[].name'\n  sinew inspect walk.bvh --pose walk@0.5\n  sinew inspect walk.bvh --pose walk@0..1 --fps 10 --json"
     )]
     Inspect(InspectArgs),
     /// Convert models and motions to .sinew (one file, or many in parallel with --out-dir).
@@ -104,6 +104,13 @@ pub enum PositionKeys {
 pub struct InspectArgs {
     /// The file to inspect (.ms3d, .gltf, .glb, .obj, .bvh, .sinew).
     pub file: PathBuf,
+    /// Print the model-space transform of every joint at clip time TIME (seconds), or at every frame
+    /// of START..END (both included), as the runtime computes it, instead of the file summary.
+    #[arg(long, value_name = "CLIP@TIME|CLIP@START..END")]
+    pub pose: Option<String>,
+    /// Frame rate of a --pose range (default: the clip's sample rate).
+    #[arg(long, value_name = "FPS", requires = "pose")]
+    pub fps: Option<f32>,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
@@ -184,6 +191,9 @@ pub struct ConvertArgs {
     /// Retarget --anim motion: transfer rotations as changes from the motion's rest pose.
     #[arg(long)]
     pub retarget: bool,
+    /// With --retarget: factor for the root's translation instead of the ratio of hip heights.
+    #[arg(long, value_name = "K", requires = "retarget")]
+    pub root_scale: Option<f32>,
     /// Cut the model's single timeline into named clips by frame (`walk=1-30,run=31-50`).
     #[arg(long, value_name = "NAME=A-B,...")]
     pub clips: Option<String>,

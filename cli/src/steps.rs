@@ -5,14 +5,14 @@
 use crate::cli::{CompressArgs, LodArgs, SplitOpts};
 use crate::report::{
     diag_report, EntryReport, MappingReport, MotionReport, PartReport, RestDifferenceReport,
-    SplitReport,
+    RootScaleReport, SplitReport,
 };
 use anyhow::{anyhow, bail, Context};
 use sinew_core::Skeleton;
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::mapping::{self, JointSet, Mapping, MatchMethod, Side};
-use sinew_pipeline::retarget::{self, REST_DIFFERENCE_WARN_DEGREES};
+use sinew_pipeline::retarget::{self, RetargetOptions, REST_DIFFERENCE_WARN_DEGREES};
 use sinew_pipeline::split::{self, MaskSpec};
 use sinew_scene::{Diagnostic, Scene, SceneClip, SourceFormat};
 use std::path::Path;
@@ -137,7 +137,7 @@ pub fn bind_motion(
     motion: &Scene,
     motion_label: &str,
     map_file: Option<&MappingFile>,
-    do_retarget: bool,
+    retarget_options: Option<&RetargetOptions>,
 ) -> anyhow::Result<MotionReport> {
     let Some(rig_skel) = scene.skeleton.clone() else {
         bail!("{model_label}: has no skeleton to bind the motion of {motion_label} to");
@@ -164,16 +164,25 @@ pub fn bind_motion(
         );
     }
     let mut leg_scale = None;
+    let mut root = None;
     let mut rest_differences = Vec::new();
     let mut bound: Vec<SceneClip> = Vec::new();
-    if do_retarget {
+    if let Some(options) = retarget_options {
         let Some(src_skel) = &motion.skeleton else {
             bail!("{motion_label}: --retarget needs a skeleton in the motion file");
         };
         for clip in &motion.clips {
-            let r = retarget::retarget(clip, src_skel, &rig_skel, &mapping)
+            let r = retarget::retarget_with(clip, src_skel, &rig_skel, &mapping, options)
                 .map_err(|e| anyhow!("{motion_label}: retargeting onto {model_label}: {e}"))?;
             leg_scale = Some(r.leg_scale);
+            root = Some(RootScaleReport {
+                root_scale: r.root_scale,
+                source: r.root_scale_source.name(),
+                hip_heights: r.hip_heights.map(|(m, r)| [m, r]),
+                standing_shift: r.standing_shift,
+                grounding: r.grounding,
+                root_joints: r.root_joints.clone(),
+            });
             scene.diagnostics.extend(r.diagnostics);
             bound.push(r.clip);
         }
@@ -239,8 +248,10 @@ pub fn bind_motion(
     Ok(MotionReport {
         file: motion_label.to_string(),
         mapping: report,
-        retargeted: do_retarget,
+        retargeted: retarget_options.is_some(),
         leg_scale,
+        root_scale: root.as_ref().map(|r| r.root_scale),
+        root,
         rest_differences,
         clips: names,
     })

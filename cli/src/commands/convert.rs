@@ -18,6 +18,7 @@ use anyhow::{anyhow, bail};
 use sinew_pipeline::compile::{CompileOptions, CompileReport};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
+use sinew_pipeline::retarget::RetargetOptions;
 use sinew_scene::Scene;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
@@ -109,7 +110,7 @@ struct Plan {
     import: crate::cli::ImportArgs,
     anims: Vec<(String, Scene)>,
     map: Option<MappingFile>,
-    retarget: bool,
+    retarget: Option<RetargetOptions>,
     clips: Option<String>,
     split: SplitPlan,
     lod: Option<LodOptions>,
@@ -136,7 +137,7 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
             motion,
             motion_label,
             plan.map.as_ref(),
-            plan.retarget,
+            plan.retarget.as_ref(),
         )?);
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
@@ -184,6 +185,11 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if args.retarget && args.anim.is_empty() {
         bail!("--retarget: needs at least one --anim motion file");
     }
+    if let Some(k) = args.root_scale {
+        if !k.is_finite() || k <= 0.0 {
+            bail!("--root-scale: {k} is not usable: it must be a finite number above 0");
+        }
+    }
     let jobs: Vec<Job> = match (&args.output, &args.out_dir) {
         (Some(o), None) => {
             if args.inputs.len() != 1 {
@@ -228,7 +234,9 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         import: args.import.clone(),
         anims,
         map,
-        retarget: args.retarget,
+        retarget: args.retarget.then_some(RetargetOptions {
+            root_scale: args.root_scale,
+        }),
         clips: args.clips.clone(),
         split,
         lod,
@@ -473,7 +481,16 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
             m.file,
             m.mapping.bound,
             m.mapping.entries.len(),
-            if m.retargeted { ", retargeted" } else { "" },
+            match &m.root {
+                Some(r) => format!(
+                    ", retargeted (root scale {} from {}, standing shift {})",
+                    num(r.root_scale),
+                    r.source,
+                    num(r.standing_shift)
+                ),
+                None if m.retargeted => ", retargeted".to_string(),
+                None => String::new(),
+            },
             if m.mapping.unmatched_motion.is_empty() {
                 "none".to_string()
             } else {

@@ -6,12 +6,18 @@
 use crate::cli::InspectArgs;
 use crate::output::Ctx;
 use crate::report::human;
+use crate::report::pose::{pose_report, pose_text};
 use crate::report::SectionReport;
 use crate::report::{add_encodings, build_report};
 use crate::Status;
+use anyhow::Context;
+use sinew_pipeline::pose::{self, PoseRequest};
 
 /// Runs `sinew inspect`.
 pub fn run(args: &InspectArgs, ctx: &Ctx) -> anyhow::Result<Status> {
+    if let Some(spec) = &args.pose {
+        return run_pose(args, spec, ctx);
+    }
     let scene = crate::input::import(&args.file, &args.import)?;
     let file_size = std::fs::metadata(&args.file).map(|m| m.len()).ok();
     let mut report = build_report(&args.file, file_size, &scene);
@@ -40,6 +46,25 @@ pub fn run(args: &InspectArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         ctx.emit_json(&report)?;
     } else if ctx.human() {
         eprint!("{}", human(&report));
+    }
+    Ok(Status::Success)
+}
+
+/// Runs `sinew inspect FILE --pose CLIP@TIME`: the file as the runtime sees it (a source file is
+/// compiled and read back, as `bake` does), posed by sinew-core at each requested time.
+fn run_pose(args: &InspectArgs, spec: &str, ctx: &Ctx) -> anyhow::Result<Status> {
+    let shown = args.file.display();
+    let req = PoseRequest::parse(spec, args.fps).map_err(anyhow::Error::msg)?;
+    let asset = crate::commands::bake::load_asset(&args.file, &args.import, false)?;
+    let poses = pose::sample(&asset, &req).with_context(|| format!("{shown}"))?;
+    let Some(skeleton) = &asset.skeleton else {
+        anyhow::bail!("{shown}: has no skeleton to pose");
+    };
+    let report = pose_report(&shown.to_string(), skeleton, &poses);
+    if ctx.json {
+        ctx.emit_json(&report)?;
+    } else if ctx.human() {
+        eprint!("{}", pose_text(&report));
     }
     Ok(Status::Success)
 }

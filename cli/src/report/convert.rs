@@ -65,12 +65,35 @@ pub struct MotionReport {
     pub mapping: MappingReport,
     /// Whether `--retarget` was used.
     pub retargeted: bool,
-    /// With `--retarget`: factor applied to root translation (target/source leg length).
+    /// With `--retarget`: ratio of the leg chain lengths, rig over motion (informational; the root
+    /// translation is scaled by `root_scale`).
     pub leg_scale: Option<f32>,
+    /// With `--retarget`: factor applied to the root translation (hip heights, or `--root-scale`).
+    pub root_scale: Option<f32>,
+    /// With `--retarget`: how the root translation was scaled and grounded.
+    pub root: Option<RootScaleReport>,
     /// Without `--retarget`: bound pairs whose orientations differ by more than the threshold.
     pub rest_differences: Vec<RestDifferenceReport>,
     /// Names of the clips added to the output.
     pub clips: Vec<String>,
+}
+
+/// How `--retarget` moved the root (docs/mapping.md).
+#[derive(Debug, Clone, Serialize)]
+pub struct RootScaleReport {
+    /// Factor applied to the root translation.
+    pub root_scale: f32,
+    /// `hip-height`, `lowest-joint`, `override` or `none`.
+    pub source: &'static str,
+    /// Hip heights `[motion, rig]` above the feet (or lowest joint), each in its own units.
+    pub hip_heights: Option<[f32; 2]>,
+    /// The motion's standing shift, motion units (0 when its rest pose stands on its floor).
+    pub standing_shift: f32,
+    /// Height added to the root to put the rig's feet on its bind-pose floor, rig units (0 when the
+    /// standing shift is 0).
+    pub grounding: f32,
+    /// Rig joints whose translation was transferred.
+    pub root_joints: Vec<String>,
 }
 
 /// One clip made by a split.

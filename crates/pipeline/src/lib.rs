@@ -9,6 +9,7 @@ pub mod compress;
 pub mod cut;
 pub mod lod;
 pub mod mapping;
+pub mod pose;
 pub mod retarget;
 pub mod split;
 pub mod texture;

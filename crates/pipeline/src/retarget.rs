@@ -12,12 +12,41 @@
 //! ```
 //!
 //! where `s` is the motion joint bound to rig joint `j`. Unbound rig joints keep their bind local
-//! rotation. The root translation (of each bound joint whose motion joint has translation keys and no
-//! bound ancestor with translation keys, normally the hips) is moved by its change from rest, rotated from
-//! the source parent's model frame into the target parent's, and scaled by the ratio of leg lengths
-//! (hip-to-foot chain length, target over source, from the thigh and foot slots of the mapping).
+//! rotation.
 //!
-//! Assumptions: both skeletons share the model-space axes (same up and forward) and have unit scale;
+//! # Root translation
+//!
+//! The root translation (of each bound joint whose motion joint has translation keys and no bound
+//! ancestor with translation keys, normally the hips) is moved by its change from a *standing*
+//! reference, rotated from the source parent's model frame into the target parent's, and scaled by
+//! the **root scale** `k`:
+//!
+//! ```text
+//! change(t)  = R_src_parent(t) * (t_src_local(t) - t_src_rest_local) + (0, standing_shift, 0)
+//! t_tgt(t)   = t_tgt_bind + R_tgt_parent(t)^-1 * (k * change(t))
+//! k          = hip_height(rig) / hip_height(motion)           (or the caller's override)
+//! hip_height = height (model y) of the root joint above the mapped foot joints (the lower of the two),
+//!              in the rest pose (motion) / bind pose (rig)
+//! standing_shift = rest root y - (lowest foot y over the clip + hip_height(motion))
+//!                = rest foot y - lowest foot y over the clip
+//! ```
+//!
+//! The standing shift is what a motion file's rest pose can get wrong about its floor: a BVH rest
+//! pose is the `OFFSET`s (the root at 0, so the feet hang below the origin) while its root channels
+//! are absolute heights above the capture floor. Measuring from the lowest the feet reach over the
+//! clip puts the motion's standing hips at zero change, so the rig's feet land on its own bind-pose
+//! floor in any unit. It is applied only when the rest pose's feet are more than
+//! [`STANDING_SHIFT_MIN`] of the motion's hip height away from that lowest point (otherwise 0: the
+//! rest pose stands on the clip's floor, and a clip whose feet dip or lift a little keeps its change
+//! from rest exactly). When it is applied, the rest pose is not trusted for the vertical either, and
+//! the result is **grounded**: after the rotations and the scaled root are transferred, one constant
+//! height is added to the root so that the lowest the rig's feet reach over the clip equals their
+//! height in the rig's bind pose. This absorbs what the hip heights miss, e.g. a CMU rest pose whose
+//! legs splay outwards (its vertical hip height is shorter than the legs the walk straightens).
+//! Without a bound pair of feet the lowest joint of each skeleton stands in for them (a
+//! `retarget-no-feet` note). Horizontal motion keeps its change from the rest pose, scaled.
+//!
+//! Assumptions: both skeletons share the model-space axes (+Y up, same forward) and have unit scale;
 //! scale keys are not transferred. Other translations stay at the rig's bind values.
 
 use crate::mapping::{Mapping, Side, Slot};
@@ -31,6 +60,10 @@ use std::collections::HashMap;
 /// orientations differ (see [`rest_orientation_differences`]).
 pub const REST_DIFFERENCE_WARN_DEGREES: f32 = 5.0;
 
+/// Fraction of the motion's hip height by which the rest pose's feet must miss the clip's lowest
+/// feet before the standing shift is applied (see the module docs).
+pub const STANDING_SHIFT_MIN: f32 = 0.25;
+
 /// Why a clip could not be retargeted.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum RetargetError {
@@ -43,6 +76,9 @@ pub enum RetargetError {
     /// Additive clips store differences, not poses; they cannot be retargeted this way.
     #[error("clip {0:?} is additive; only absolute clips can be retargeted")]
     Additive(String),
+    /// The root scale override is not a finite number above 0.
+    #[error("root scale {0} is not usable: it must be a finite number above 0")]
+    BadRootScale(f32),
 }
 
 /// A retargeted clip and the figures behind it.
@@ -51,14 +87,58 @@ pub struct Retargeted {
     /// The clip, with tracks named by rig joints: a rotation track for every bound rig joint and a
     /// translation track for each root joint. Not additive; name, duration, rate and looping kept.
     pub clip: SceneClip,
-    /// Factor applied to the root translation's change from rest (1 when no leg was found).
+    /// Ratio of the leg chain lengths, target over source (1 when no leg was found); informational
+    /// since the root scale (below) took its place.
     pub leg_scale: f32,
+    /// Factor applied to the root translation's change: the override, or the ratio of hip heights.
+    pub root_scale: f32,
+    /// Where `root_scale` came from.
+    pub root_scale_source: RootScaleSource,
+    /// Hip heights `(motion, rig)` above the feet (or the lowest joint), model units.
+    pub hip_heights: Option<(f32, f32)>,
+    /// The motion's standing shift (see the module docs), motion units.
+    pub standing_shift: f32,
+    /// Height added to the root so that the rig's feet reach their bind height (see the module
+    /// docs), rig units; 0 when the standing shift is 0.
+    pub grounding: f32,
     /// Summed hip-to-foot chain lengths `(source, target)` over the legs found, if any.
     pub leg_lengths: Option<(f32, f32)>,
     /// Rig joints whose translation was transferred (normally the one bound to the hips).
     pub root_joints: Vec<String>,
     /// Notes: no legs found, and so on.
     pub diagnostics: Vec<Diagnostic>,
+}
+
+/// Where a root scale came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RootScaleSource {
+    /// Ratio of the hip heights above the mapped feet.
+    HipHeight,
+    /// Ratio of the heights above the lowest joint (no bound pair of feet).
+    LowestJoint,
+    /// Given by the caller.
+    Override,
+    /// No usable height: 1.
+    None,
+}
+
+impl RootScaleSource {
+    /// Stable kebab-case name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::HipHeight => "hip-height",
+            Self::LowestJoint => "lowest-joint",
+            Self::Override => "override",
+            Self::None => "none",
+        }
+    }
+}
+
+/// Options of [`retarget_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RetargetOptions {
+    /// Root scale to use instead of the ratio of hip heights (finite and above 0).
+    pub root_scale: Option<f32>,
 }
 
 /// A bound joint pair whose rest (source) and bind (target) orientations differ.
@@ -212,8 +292,77 @@ fn leg_lengths(source: &Skeleton, target: &Skeleton, mapping: &Mapping) -> Optio
     found.then_some((s_total, t_total))
 }
 
+/// Model-space positions of a pose given as locals in parent-before-child order (unit scale).
+fn model_positions(parents: &[Option<u16>], locals: &[Transform]) -> Vec<Vec3> {
+    let mut rot: Vec<Quat> = Vec::with_capacity(locals.len());
+    let mut out: Vec<Vec3> = Vec::with_capacity(locals.len());
+    for (i, l) in locals.iter().enumerate() {
+        match parents
+            .get(i)
+            .copied()
+            .flatten()
+            .map(usize::from)
+            .filter(|&p| p < out.len())
+        {
+            Some(p) => {
+                out.push(out[p] + rot[p] * l.translation);
+                rot.push((rot[p] * l.rotation).normalize());
+            }
+            None => {
+                out.push(l.translation);
+                rot.push(l.rotation.normalize());
+            }
+        }
+    }
+    out
+}
+
+/// The source's local pose at `t`: bind values replaced by whatever the tracks key.
+fn sample_locals(
+    bind: &[Transform],
+    tracks: &[Option<&TrackCurves>],
+    t: f32,
+    out: &mut [Transform],
+) {
+    for (s, local) in out.iter_mut().enumerate() {
+        *local = bind[s];
+        if let Some(track) = tracks[s] {
+            if let Some(v) = sample_vec3(&track.translation, t) {
+                local.translation = v;
+            }
+            if let Some(q) = sample_quat(&track.rotation, t) {
+                local.rotation = q;
+            }
+        }
+    }
+}
+
+/// The mapped feet `(source joints, target joints)`, or `None` without a bound foot on both sides
+/// of at least one pair.
+fn mapped_feet(
+    source: &Skeleton,
+    target: &Skeleton,
+    mapping: &Mapping,
+) -> Option<(Vec<usize>, Vec<usize>)> {
+    let (mut src, mut tgt) = (Vec::new(), Vec::new());
+    for e in &mapping.entries {
+        if e.slot != Some(Slot::Foot) {
+            continue;
+        }
+        let (Some(t), Some(s)) = (
+            target.find(&e.rig),
+            e.motion.as_deref().and_then(|m| source.find(m)),
+        ) else {
+            continue;
+        };
+        tgt.push(usize::from(t));
+        src.push(usize::from(s));
+    }
+    (!src.is_empty()).then_some((src, tgt))
+}
+
 /// Retargets `clip` (tracks named by `source` joints) onto `target` through `mapping` (rig = target,
-/// motion = source). See the module docs for the formulas.
+/// motion = source), with default options. See the module docs for the formulas.
 ///
 /// Keys: one key per distinct key time of the clip's tracks (all curves sampled there). Errors when the
 /// mapping names joints the skeletons lack, or the clip is additive.
@@ -223,8 +372,24 @@ pub fn retarget(
     target: &Skeleton,
     mapping: &Mapping,
 ) -> Result<Retargeted, RetargetError> {
+    retarget_with(clip, source, target, mapping, &RetargetOptions::default())
+}
+
+/// [`retarget`] with options (a root scale override).
+pub fn retarget_with(
+    clip: &SceneClip,
+    source: &Skeleton,
+    target: &Skeleton,
+    mapping: &Mapping,
+    options: &RetargetOptions,
+) -> Result<Retargeted, RetargetError> {
     if clip.additive {
         return Err(RetargetError::Additive(clip.name.clone()));
+    }
+    if let Some(k) = options.root_scale {
+        if !k.is_finite() || k <= 0.0 {
+            return Err(RetargetError::BadRootScale(k));
+        }
     }
     let mut src_of: Vec<Option<usize>> = vec![None; target.len()];
     let mut bound_src = vec![false; source.len()];
@@ -300,31 +465,86 @@ pub fn retarget(
     let lengths = leg_lengths(source, target, mapping);
     let leg_scale = match lengths {
         Some((s, t)) if s > 1e-6 && t.is_finite() => t / s,
-        _ => {
-            diagnostics.push(Diagnostic::warning(
-                "retarget-no-legs",
-                "no bound thigh and foot pair found (or zero source leg length); root translation \
-                 is not scaled",
+        _ => 1.0,
+    };
+
+    // Root scale and standing shift (module docs).
+    let src_rest_pos = bind_positions(source);
+    let tgt_bind_pos = bind_positions(target);
+    let (src_feet, tgt_feet, landmark) = match mapped_feet(source, target, mapping) {
+        Some((s, t)) => (s, t, RootScaleSource::HipHeight),
+        None => {
+            diagnostics.push(Diagnostic::info(
+                "retarget-no-feet",
+                "no bound foot joints; hip heights are measured above each skeleton's lowest joint",
             ));
-            1.0
+            (
+                (0..source.len()).collect(),
+                (0..target.len()).collect(),
+                RootScaleSource::LowestJoint,
+            )
         }
     };
+    let lowest = |pos: &[Vec3], joints: &[usize]| {
+        joints
+            .iter()
+            .filter_map(|&j| pos.get(j))
+            .map(|p| p.y)
+            .fold(f32::INFINITY, f32::min)
+    };
+    let src_foot_rest = lowest(&src_rest_pos, &src_feet);
+    let tgt_foot_bind = lowest(&tgt_bind_pos, &tgt_feet);
+    let mut src_local: Vec<Transform> = sb.to_vec();
+    let mut foot_min = f32::INFINITY;
+    for &t in &times {
+        sample_locals(sb, &src_tracks, t, &mut src_local);
+        foot_min = foot_min.min(lowest(
+            &model_positions(source.parents(), &src_local),
+            &src_feet,
+        ));
+    }
+    let first_root = (0..target.len()).find(|&j| root_target[j]);
+    let hip_heights = first_root.and_then(|j| {
+        let s = src_of[j]?;
+        let hm = src_rest_pos[s].y - src_foot_rest;
+        let hr = tgt_bind_pos[j].y - tgt_foot_bind;
+        (hm.is_finite() && hr.is_finite() && hm > 1e-6 && hr > 1e-6).then_some((hm, hr))
+    });
+    let (root_scale, root_scale_source) = match (options.root_scale, hip_heights) {
+        (Some(k), _) => (k, RootScaleSource::Override),
+        (None, Some((hm, hr))) => (hr / hm, landmark),
+        (None, None) => {
+            if first_root.is_some() {
+                diagnostics.push(Diagnostic::warning(
+                    "retarget-no-root-scale",
+                    "the root's height above the feet is zero or unknown on one side; root \
+                     translation is not scaled (give --root-scale)",
+                ));
+            }
+            (1.0, RootScaleSource::None)
+        }
+    };
+    // Per source root joint: how far its rest height is above its standing height on the clip's floor.
+    let standing_shift_of = |s: usize| -> f32 {
+        let rest_feet = src_foot_rest - foot_min;
+        let h = src_rest_pos[s].y - src_foot_rest;
+        if rest_feet.is_finite() && h.is_finite() && rest_feet.abs() > STANDING_SHIFT_MIN * h.abs()
+        {
+            rest_feet
+        } else {
+            0.0
+        }
+    };
+    let standing_shift = first_root
+        .and_then(|j| src_of[j])
+        .map_or(0.0, standing_shift_of);
 
     let mut rot_values: Vec<Vec<Quat>> = vec![Vec::with_capacity(times.len()); target.len()];
     let mut trans_values: Vec<Vec<Vec3>> = vec![Vec::new(); target.len()];
-    let mut src_local: Vec<Transform> = sb.to_vec();
+    // Per root joint and key, its parent's animated model rotation (for grounding, below).
+    let mut root_parent_rot: Vec<Vec<Quat>> = vec![Vec::new(); target.len()];
     for &t in &times {
-        for (s, local) in src_local.iter_mut().enumerate() {
-            *local = sb[s];
-            if let Some(track) = src_tracks[s] {
-                if let Some(v) = sample_vec3(&track.translation, t) {
-                    local.translation = v;
-                }
-                if let Some(q) = sample_quat(&track.rotation, t) {
-                    local.rotation = q;
-                }
-            }
-        }
+        sample_locals(sb, &src_tracks, t, &mut src_local);
         let src_anim = model_rotations(source.parents(), |i| src_local[i].rotation);
         let mut tgt_model: Vec<Quat> = Vec::with_capacity(target.len());
         for (j, p) in target.parents().iter().enumerate() {
@@ -347,15 +567,49 @@ pub fn retarget(
                         let src_parent = source.parents()[s]
                             .map(|p| src_anim[p as usize])
                             .unwrap_or(Quat::IDENTITY);
-                        let change = src_parent * (src_local[s].translation - sb[s].translation);
-                        let moved = parent.inverse() * (change * leg_scale);
+                        let change = src_parent * (src_local[s].translation - sb[s].translation)
+                            + Vec3::Y * standing_shift_of(s);
+                        let moved = parent.inverse() * (change * root_scale);
                         trans_values[j].push(tb[j].translation + moved);
+                        root_parent_rot[j].push(parent);
                     }
                     model
                 }
                 None => (parent * tb[j].rotation).normalize(),
             };
             tgt_model.push(model);
+        }
+    }
+
+    // Grounding: when the motion's rest pose does not stand on its floor, the rig's feet are put as
+    // low over the clip as they are in its bind pose (module docs).
+    let mut grounding = 0.0f32;
+    if standing_shift != 0.0 {
+        let mut rig_foot_min = f32::INFINITY;
+        let mut locals: Vec<Transform> = tb.to_vec();
+        for k in 0..times.len() {
+            for (j, local) in locals.iter_mut().enumerate() {
+                *local = tb[j];
+                if let Some(&q) = rot_values[j].get(k) {
+                    local.rotation = q;
+                }
+                if let Some(&v) = trans_values[j].get(k) {
+                    local.translation = v;
+                }
+            }
+            rig_foot_min = rig_foot_min.min(lowest(
+                &model_positions(target.parents(), &locals),
+                &tgt_feet,
+            ));
+        }
+        let c = tgt_foot_bind - rig_foot_min;
+        if c.is_finite() {
+            grounding = c;
+            for (values, rots) in trans_values.iter_mut().zip(&root_parent_rot) {
+                for (v, r) in values.iter_mut().zip(rots) {
+                    *v += r.inverse() * (Vec3::Y * c);
+                }
+            }
         }
     }
 
@@ -388,6 +642,11 @@ pub fn retarget(
             tracks,
         },
         leg_scale,
+        root_scale,
+        root_scale_source,
+        hip_heights,
+        standing_shift,
+        grounding,
         leg_lengths: lengths,
         root_joints,
         diagnostics,

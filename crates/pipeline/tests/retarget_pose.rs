@@ -7,7 +7,10 @@
 use sinew_core::glam::{EulerRot, Quat, Vec3};
 use sinew_core::{Curve, JointDesc, Skeleton, TrackCurves, Transform};
 use sinew_pipeline::mapping::{map_joints, JointSet, MatchMethod, Slot};
-use sinew_pipeline::retarget::{rest_orientation_differences, retarget, RetargetError};
+use sinew_pipeline::retarget::{
+    rest_orientation_differences, retarget, retarget_with, RetargetError, RetargetOptions,
+    RootScaleSource,
+};
 use sinew_scene::SceneClip;
 
 /// (name, parent, model-space rest position): a small CMU-named body.
@@ -291,5 +294,72 @@ fn unknown_joints_and_additive_clips_are_errors() {
     assert_eq!(
         retarget(&additive, &source, &target, &mapping).unwrap_err(),
         RetargetError::Additive("walk".into())
+    );
+}
+
+/// The BVH convention: the rest pose has the root at the origin (its `OFFSET`, so the feet hang
+/// 80 units below it) while the clip's root translation is absolute (90 above the floor). The
+/// retarget must not add those 90 units to the rig's bind height: the rig's feet must reach exactly
+/// their bind height, on a rig twice as big.
+#[test]
+fn a_rest_pose_off_its_floor_is_grounded_on_the_rig() {
+    let body = bvh_like();
+    let hips = body.find("Hips").unwrap() as usize;
+    let mut bind = body.bind_local().to_vec();
+    bind[hips].translation = Vec3::ZERO;
+    let inverse = sinew_core::skeleton::inverse_bind_from_locals(body.parents(), &bind);
+    let source = Skeleton::new(
+        body.names().to_vec(),
+        body.parents().to_vec(),
+        bind,
+        inverse,
+    )
+    .unwrap();
+    let target = skeleton(2.0, &biped_name, &twisted, None);
+    let mapping = map_joints(
+        &JointSet::from_skeleton(&target),
+        &JointSet::from_skeleton(&source),
+    );
+    let clip = walk();
+    let out = retarget(&clip, &source, &target, &mapping).unwrap();
+    assert_eq!(out.root_scale_source, RootScaleSource::HipHeight);
+    assert!((out.root_scale - 2.0).abs() < 1e-5, "{}", out.root_scale);
+    let (hm, hr) = out.hip_heights.unwrap();
+    assert!(
+        (hm - 80.0).abs() < 1e-3 && (hr - 160.0).abs() < 1e-3,
+        "{hm} {hr}"
+    );
+    assert!(out.standing_shift < -70.0, "{}", out.standing_shift);
+    // The rig's feet come down to their bind height (20) and no lower.
+    let feet = ["Bip01 L Foot", "Bip01 R Foot"].map(|n| target.find(n).unwrap() as usize);
+    let lowest = (0..TIMES.len())
+        .map(|k| {
+            let p = pose(&target, &out.clip, k);
+            feet.iter().map(|&f| p[f].y).fold(f32::INFINITY, f32::min)
+        })
+        .fold(f32::INFINITY, f32::min);
+    assert!((lowest - 20.0).abs() < 1e-3, "lowest foot {lowest}");
+    // The old reading (change from the rest root at 0) would have put the hips 180 units higher.
+    let hips_y = out
+        .clip
+        .tracks
+        .iter()
+        .find(|t| t.joint == "Bip01 Pelvis")
+        .unwrap();
+    assert!(hips_y.translation.values.iter().all(|v| v.length() < 200.0));
+
+    // An override replaces the scale, and the feet are grounded all the same.
+    let opts = RetargetOptions {
+        root_scale: Some(0.5),
+    };
+    let out = retarget_with(&clip, &source, &target, &mapping, &opts).unwrap();
+    assert_eq!(out.root_scale, 0.5);
+    assert_eq!(out.root_scale_source, RootScaleSource::Override);
+    let opts = RetargetOptions {
+        root_scale: Some(-1.0),
+    };
+    assert_eq!(
+        retarget_with(&clip, &source, &target, &mapping, &opts).unwrap_err(),
+        RetargetError::BadRootScale(-1.0)
     );
 }

@@ -177,7 +177,8 @@ impl PositionKeyFigures {
 struct Anim<'a> {
     file: &'a File,
     skeleton: &'a Skeleton,
-    /// For each skeleton joint, its file joint index.
+    /// For each skeleton joint, its file joint index (`usize::MAX` for the static joint the importer
+    /// adds for vertices without a joint: it has no keys and keeps its bind pose).
     file_of: Vec<usize>,
     curves: Vec<ViewerCurves>,
     r0: Vec<Quat>,
@@ -189,7 +190,10 @@ impl Anim<'_> {
         out.clear();
         for (s, &f) in self.file_of.iter().enumerate() {
             let bind = self.skeleton.bind_local()[s];
-            let c = &self.curves[f];
+            let Some(c) = self.curves.get(f) else {
+                out.push(bind.to_mat4());
+                continue;
+            };
             if c.is_empty() {
                 out.push(bind.to_mat4());
                 continue;
@@ -334,7 +338,7 @@ pub(crate) fn build_clip(
         ));
     }
 
-    let mut file_of = vec![0usize; skeleton.len()];
+    let mut file_of = vec![usize::MAX; skeleton.len()];
     for (f, &s) in new_index.iter().enumerate() {
         if let Some(slot) = file_of.get_mut(s as usize) {
             *slot = f;
@@ -620,7 +624,11 @@ impl Measure {
                     let y = globals[s].w_axis.y;
                     let dy = (y - self.bind_root_y[s]).abs();
                     travel = travel.max(dy / self.size);
-                } else if !anim.curves[anim.file_of[s]].pos.is_empty() {
+                } else if anim
+                    .curves
+                    .get(anim.file_of[s])
+                    .is_some_and(|c| !c.pos.is_empty())
+                {
                     let bind_t = skel.bind_local()[s].translation;
                     let d = locals[s].w_axis.truncate() - bind_t;
                     let off = axes[s]

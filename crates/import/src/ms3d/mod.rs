@@ -24,7 +24,7 @@ use convention::Influences;
 pub use parse::{parse, File};
 
 use crate::{ImportError, ImportOptions, Resolver};
-use sinew_core::glam::{Vec2, Vec3};
+use sinew_core::glam::{Mat4, Vec2, Vec3};
 use sinew_core::{JointDesc, JointIndex, Lod, Skeleton, Submesh, Transform};
 use sinew_scene::{Diagnostic, Material, Mesh, Scene, SourceFormat};
 use std::collections::HashMap;
@@ -55,7 +55,7 @@ pub fn build_scene(
     }
 
     // Skeleton.
-    let (skeleton, new_index) = build_skeleton(file_name, file)?;
+    let (mut skeleton, new_index) = build_skeleton(file_name, file)?;
 
     // Materials: unique names; empty names become `material<i>`.
     let mut material_names = Vec::with_capacity(file.materials.len());
@@ -77,11 +77,34 @@ pub fn build_scene(
         });
     }
 
-    // Skin influences per file vertex.
-    let influences = if skeleton.is_some() {
-        Some(vertex_influences(file, &new_index, &mut scene.diagnostics))
-    } else {
-        None
+    // Skin influences per file vertex; vertices without a joint go to an added static joint.
+    let influences = match &mut skeleton {
+        Some(skel) => {
+            let (mut inf, unweighted) = vertex_influences(file, &new_index, &mut scene.diagnostics);
+            if !unweighted.is_empty() {
+                let joint = add_static_joint(file_name, skel)?;
+                for &v in &unweighted {
+                    if let Some(slot) = inf.get_mut(v) {
+                        *slot = ([joint, 0, 0, 0], [1.0, 0.0, 0.0, 0.0]);
+                    }
+                }
+                scene.diagnostics.push(
+                    Diagnostic::warning(
+                        "ms3d-unweighted-vertices",
+                        format!(
+                            "{} vertices have no joint; they were bound to the added static joint {:?} \
+                             (a root with the identity bind pose that no clip drives), so they stay where \
+                             they are in every pose, as in Milkshape",
+                            unweighted.len(),
+                            skel.names()[usize::from(joint)]
+                        ),
+                    )
+                    .with_figure("vertices", unweighted.len() as f64),
+                );
+            }
+            Some(inf)
+        }
+        None => None,
     };
 
     if !file.triangles.is_empty() && !file.groups.is_empty() {
@@ -147,13 +170,49 @@ fn build_skeleton(
     Ok((Some(skeleton), new_index))
 }
 
+/// Name of the static joint added for vertices without a joint (`#2`, `#3`... appended if taken).
+pub const UNASSIGNED_JOINT: &str = "(unassigned)";
+
+/// Appends a root joint with the identity bind pose and inverse bind matrix, named
+/// [`UNASSIGNED_JOINT`], and returns its index. The other joints keep their indices, so the other
+/// vertices keep their influences, bit for bit.
+fn add_static_joint(file_name: &str, skel: &mut Skeleton) -> Result<JointIndex, ImportError> {
+    let mut name = UNASSIGNED_JOINT.to_string();
+    let mut k = 2;
+    while skel.find(&name).is_some() {
+        name = format!("{UNASSIGNED_JOINT}#{k}");
+        k += 1;
+    }
+    let index = skel.len();
+    let mut names = skel.names().to_vec();
+    names.push(name);
+    let mut parents = skel.parents().to_vec();
+    parents.push(None);
+    let mut bind = skel.bind_local().to_vec();
+    bind.push(Transform::IDENTITY);
+    let mut inverse = skel.inverse_bind().to_vec();
+    inverse.push(Mat4::IDENTITY);
+    *skel = Skeleton::new(names, parents, bind, inverse).map_err(|e| {
+        ImportError::in_section(
+            file_name,
+            "joints",
+            format!("adding a static joint for vertices without a joint: {e}"),
+        )
+    })?;
+    JointIndex::try_from(index).map_err(|_| {
+        ImportError::in_section(file_name, "joints", "too many joints for a static joint")
+    })
+}
+
+/// Per file vertex its influences, and the vertices with no valid joint (their entry is a
+/// placeholder the caller replaces).
 fn vertex_influences(
     file: &File,
     new_index: &[JointIndex],
     diagnostics: &mut Vec<Diagnostic>,
-) -> Vec<Influences> {
+) -> (Vec<Influences>, Vec<usize>) {
     let nj = new_index.len();
-    let mut unweighted = 0usize;
+    let mut unweighted = Vec::new();
     let mut bad_ids = 0usize;
     let mut out = Vec::with_capacity(file.vertices.len());
     for (i, v) in file.vertices.iter().enumerate() {
@@ -196,7 +255,7 @@ fn vertex_influences(
         }
         let total: f32 = merged.iter().map(|p| p.1).sum();
         if merged.is_empty() || total <= 0.0 {
-            unweighted += 1;
+            unweighted.push(i);
             out.push(([0; 4], [1.0, 0.0, 0.0, 0.0]));
             continue;
         }
@@ -215,16 +274,7 @@ fn vertex_influences(
             format!("{bad_ids} vertex influences name a joint index at or beyond the {nj} joints and were dropped"),
         ));
     }
-    if unweighted > 0 {
-        diagnostics.push(
-            Diagnostic::warning(
-                "ms3d-unweighted-vertices",
-                format!("{unweighted} vertices have no joint; they were bound wholly to the first root joint"),
-            )
-            .with_figure("vertices", unweighted as f64),
-        );
-    }
-    out
+    (out, unweighted)
 }
 
 fn canonical(x: f32) -> u32 {

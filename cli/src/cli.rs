@@ -74,6 +74,11 @@ pub enum Command {
         after_help = "Examples:\n  sinew verify walk.exr --against fixtures/biped.sinew\n  sinew verify man.pc2 --against man.sinew --json"
     )]
     Verify(VerifyArgs),
+    /// Export to glTF 2.0 (.glb or .gltf): skeleton, skin, meshes, LODs, textures, every clip sampled.
+    #[command(
+        after_help = "Examples:\n  sinew export fixtures/biped.sinew -o biped.glb\n  sinew export man.mdl -o man.gltf\n  sinew export zombie.ms3d --lod 0.5,0.25 -o zombie.glb --json\n\nDecisions (axes, units, extras, MSFT_lod): docs/export.md."
+    )]
+    Export(ExportArgs),
 }
 
 /// Import options shared by every command that reads source files.
@@ -351,6 +356,22 @@ pub struct VerifyArgs {
     #[arg(long, value_name = "FILE")]
     pub against: PathBuf,
     /// Import options (source files).
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The file to export (any supported input).
+    pub file: PathBuf,
+    /// Output file: `.glb` (binary) or `.gltf` (JSON with the buffer embedded).
+    #[arg(short, long, value_name = "OUT.glb|OUT.gltf")]
+    pub output: PathBuf,
+    /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
+    #[arg(long, value_name = "R1,R2|none")]
+    pub lod: Option<String>,
+    /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
 }

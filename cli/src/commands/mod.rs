@@ -3,6 +3,7 @@
 pub mod bake;
 pub mod completions;
 pub mod convert;
+pub mod export;
 pub mod inspect;
 pub mod lod;
 pub mod map;
@@ -24,5 +25,6 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
         Command::Lod(args) => lod::run(&args, ctx),
         Command::Bake(args) => bake::run(&args, ctx),
         Command::Verify(args) => verify::run(&args, ctx),
+        Command::Export(args) => export::run(&args, ctx),
     }
 }

@@ -1,0 +1,11 @@
+//! Pictures of assets, drawn on the CPU with no GPU and no window: contact sheets of a model (rest
+//! pose from the front and side with its skeleton, poses across each clip, each LOD beside LOD 0) and
+//! pictures of joint mappings. The same inputs give the same PNG bytes.
+//!
+//! - [`canvas`]: pixels, z-buffered flat triangles (our own rasteriser), lines and dots (tiny-skia), PNG;
+//! - [`text`]: labels in the embedded DejaVu Sans Mono (ab_glyph);
+//! - [`camera`]: front and side orthographic views fitted to a cell.
+
+pub mod camera;
+pub mod canvas;
+pub mod text;

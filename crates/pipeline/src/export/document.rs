@@ -88,7 +88,17 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
     let mut scene_nodes = Vec::new();
     let mut skin = None;
     if let Some(s) = &skeleton {
-        let roots = b.joints(s);
+        let mut roots = b.joints(s);
+        if roots.len() > 1 {
+            // glTF wants the joints of a skin under one common root: a plain node (not a joint,
+            // identity transform) holds the skeleton's roots.
+            let holder = b.root.push(json::Node {
+                name: Some("skeleton".to_string()),
+                children: Some(roots),
+                ..Default::default()
+            });
+            roots = vec![holder];
+        }
         skin = Some(b.skin(s, &roots));
         scene_nodes.extend(roots);
     }

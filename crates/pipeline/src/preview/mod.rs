@@ -4,8 +4,15 @@
 //!
 //! - [`canvas`]: pixels, z-buffered flat triangles (our own rasteriser), lines and dots (tiny-skia), PNG;
 //! - [`text`]: labels in the embedded DejaVu Sans Mono (ab_glyph);
-//! - [`camera`]: front and side orthographic views fitted to a cell.
+//! - [`camera`]: front and side orthographic views fitted to a cell;
+//! - [`model`]: an asset posed through the runtime and drawn into a cell, LOD error measured;
+//! - [`sheet`]: the contact sheet of `sinew preview`.
 
 pub mod camera;
 pub mod canvas;
+pub mod model;
+pub mod sheet;
 pub mod text;
+
+pub use camera::Up;
+pub use sheet::{contact_sheet, SheetError, SheetOptions, SheetReport};

@@ -79,6 +79,11 @@ pub enum Command {
         after_help = "Examples:\n  sinew export fixtures/biped.sinew -o biped.glb\n  sinew export man.mdl -o man.gltf\n  sinew export zombie.ms3d --lod 0.5,0.25 -o zombie.glb --json\n\nDecisions (axes, units, extras, MSFT_lod): docs/export.md."
     )]
     Export(ExportArgs),
+    /// Draw a contact sheet PNG: rest pose front and side with the skeleton, clip poses, LODs.
+    #[command(
+        after_help = "Examples:\n  sinew preview fixtures/biped.sinew -o biped.png\n  sinew preview man.mdl --clip walk --frames 8 -o walk.png\n  sinew preview zombie.ms3d --lod 0.5,0.25 --names -o zombie.png\n\nLayout and sizes: docs/cli.md."
+    )]
+    Preview(PreviewArgs),
 }
 
 /// Import options shared by every command that reads source files.
@@ -368,6 +373,46 @@ pub struct ExportArgs {
     /// Output file: `.glb` (binary) or `.gltf` (JSON with the buffer embedded).
     #[arg(short, long, value_name = "OUT.glb|OUT.gltf")]
     pub output: PathBuf,
+    /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
+    #[arg(long, value_name = "R1,R2|none")]
+    pub lod: Option<String>,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `--up` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
+pub enum UpArg {
+    /// Z for Half-Life sources (.mdl, .smd, .qc, or .sinew with game data), else Y.
+    #[default]
+    Auto,
+    /// +Y is up (glTF, MS3D, BVH, OBJ).
+    Y,
+    /// +Z is up (Half-Life).
+    Z,
+}
+
+/// `sinew preview`.
+#[derive(Debug, Args)]
+pub struct PreviewArgs {
+    /// The file to draw (any supported input).
+    pub file: PathBuf,
+    /// Output PNG.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: PathBuf,
+    /// Draw only this clip's strip.
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Poses per clip strip (1 to 32).
+    #[arg(long, value_name = "N", default_value_t = 6)]
+    pub frames: usize,
+    /// Write joint names beside the joints of the front rest view.
+    #[arg(long)]
+    pub names: bool,
+    /// The model's up axis.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
     /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
     #[arg(long, value_name = "R1,R2|none")]
     pub lod: Option<String>,

@@ -7,6 +7,7 @@ pub mod export;
 pub mod inspect;
 pub mod lod;
 pub mod map;
+pub mod preview;
 pub mod split;
 pub mod verify;
 
@@ -26,5 +27,6 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
         Command::Bake(args) => bake::run(&args, ctx),
         Command::Verify(args) => verify::run(&args, ctx),
         Command::Export(args) => export::run(&args, ctx),
+        Command::Preview(args) => preview::run(&args, ctx),
     }
 }

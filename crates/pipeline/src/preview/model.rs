@@ -87,7 +87,8 @@ fn skinned(lod: &Lod, palette: &[Mat4]) -> Option<Vec<Vec3>> {
         return None;
     }
     let mut p = vec![Vec3::ZERO; lod.vertex_count()];
-    skin_lod(palette, lod, &mut p, &mut []).ok()?;
+    let mut n = vec![Vec3::ZERO; lod.normals.len()];
+    skin_lod(palette, lod, &mut p, &mut n).ok()?;
     Some(p)
 }
 
@@ -198,9 +199,18 @@ pub fn draw_skeleton(
     }
 }
 
-/// Largest distance from a vertex of `lod` to the surface of `base` (model units), checking at most
-/// about 4 million vertex-triangle pairs (vertices taken at an even stride beyond that).
+/// The measured error of a LOD: the larger of the two one-sided vertex-to-surface distances between
+/// `lod` and `base` (model units). A simplifier that collapses edges keeps LOD vertices on the
+/// original surface, so the distance from the original's vertices to the LOD's surface is the one
+/// that shows lost detail; both are taken so neither kind of change hides.
 pub fn measured_error(base: &Lod, lod: &Lod) -> f32 {
+    one_sided(base, lod).max(one_sided(lod, base))
+}
+
+/// Largest distance from a vertex of `from` to the surface of `to` (model units), checking at most
+/// about 4 million vertex-triangle pairs (vertices taken at an even stride beyond that).
+pub fn one_sided(from: &Lod, to: &Lod) -> f32 {
+    let (base, lod) = (to, from);
     let tris: Vec<[Vec3; 3]> = base
         .indices
         .chunks_exact(3)
@@ -302,5 +312,14 @@ mod tests {
         assert_eq!(measured_error(&base, &lod), 0.0);
         lod.positions[3].z = 0.25;
         assert_eq!(measured_error(&base, &lod), 0.25);
+        // A LOD that drops a corner: its vertices lie on the original, the original's do not lie on it.
+        let cut = Lod {
+            positions: base.positions.clone(),
+            indices: vec![0, 1, 2],
+            ..Default::default()
+        };
+        assert_eq!(one_sided(&cut, &base), 0.0);
+        let d = measured_error(&base, &cut);
+        assert!((d - 0.5f32.sqrt()).abs() < 1e-6, "{d}");
     }
 }

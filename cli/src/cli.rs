@@ -224,6 +224,12 @@ pub struct MapArgs {
     /// Save the mapping as a file for `convert --map` (edit it freely).
     #[arg(long, value_name = "map.json")]
     pub write: Option<PathBuf>,
+    /// Draw the two skeletons side by side with a line per matched pair, as PNG.
+    #[arg(long, value_name = "OUT.png")]
+    pub png: Option<PathBuf>,
+    /// The up axis of both files for --png.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,

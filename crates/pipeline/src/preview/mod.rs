@@ -6,10 +6,12 @@
 //! - [`text`]: labels in the embedded DejaVu Sans Mono (ab_glyph);
 //! - [`camera`]: front and side orthographic views fitted to a cell;
 //! - [`model`]: an asset posed through the runtime and drawn into a cell, LOD error measured;
-//! - [`sheet`]: the contact sheet of `sinew preview`.
+//! - [`sheet`]: the contact sheet of `sinew preview`;
+//! - [`mapping`]: the picture of a joint mapping (`sinew map --png`).
 
 pub mod camera;
 pub mod canvas;
+pub mod mapping;
 pub mod model;
 pub mod sheet;
 pub mod text;

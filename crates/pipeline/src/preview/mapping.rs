@@ -116,6 +116,11 @@ fn layout(side: &Side<'_>, cell: Cell) -> (Vec<(String, (f32, f32))>, Vec<(usize
     }
 }
 
+/// The last component of a path label (the picture shows file names, not folders).
+fn file_label(label: &str) -> &str {
+    label.rsplit(['/', '\\']).next().unwrap_or(label)
+}
+
 /// Draws the mapping picture and encodes it as PNG.
 pub fn mapping_picture(
     rig: &Side<'_>,
@@ -166,9 +171,9 @@ pub fn mapping_picture(
     let mut canvas = Canvas::new(WIDTH, height, BACKGROUND).ok_or("picture too large")?;
     let title = format!(
         "rig {} ({})  <-  motion {} ({}): {} of {} rig joints bound",
-        mapping.rig,
+        file_label(&mapping.rig),
         mapping.rig_family.name(),
-        mapping.motion,
+        file_label(&mapping.motion),
         mapping.motion_family.name(),
         bound,
         mapping.entries.len()
@@ -212,7 +217,11 @@ pub fn mapping_picture(
         8.0,
         HEADER as f32 + 14.0,
         12.0,
-        &text::fit(&format!("rig: {}", mapping.rig), 12.0, half as f32 - 16.0),
+        &text::fit(
+            &format!("rig: {}", file_label(&mapping.rig)),
+            12.0,
+            half as f32 - 16.0,
+        ),
         INK,
     );
     text::draw(
@@ -221,7 +230,7 @@ pub fn mapping_picture(
         HEADER as f32 + 14.0,
         12.0,
         &text::fit(
-            &format!("motion: {}", mapping.motion),
+            &format!("motion: {}", file_label(&mapping.motion)),
             12.0,
             half as f32 - 16.0,
         ),

@@ -70,8 +70,11 @@ pub fn method_color(m: &MatchMethod) -> Rgb {
     }
 }
 
-/// Screen positions of one side's joints by name, and its bones.
-fn layout(side: &Side<'_>, cell: Cell) -> (Vec<(String, (f32, f32))>, Vec<(usize, usize)>) {
+/// Joint names with their pixel positions.
+type Placed = Vec<(String, (f32, f32))>;
+
+/// Screen positions of one side's joints by name, and its bones (parent, child).
+fn layout(side: &Side<'_>, cell: Cell) -> (Placed, Vec<(usize, usize)>) {
     match side.skeleton {
         Some(s) if !s.is_empty() => {
             let mut models = vec![Mat4::IDENTITY; s.len()];

@@ -353,6 +353,12 @@ pub struct BakeArgs {
     /// EXR: where normals go.
     #[arg(long, value_enum, default_value_t = NormalsArg::File)]
     pub normals: NormalsArg,
+    /// Also draw frames of the written cache (read back from its bytes) as PNG.
+    #[arg(long, value_name = "OUT.png")]
+    pub preview: Option<PathBuf>,
+    /// The up axis for --preview.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
     /// Import options (source files).
     #[command(flatten)]
     pub import: ImportArgs,

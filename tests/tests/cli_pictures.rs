@@ -324,3 +324,57 @@ fn bad_picture_arguments_exit_2_naming_the_file() {
     ]);
     assert_one_line_error(&r, &out);
 }
+
+#[test]
+fn bake_preview_draws_the_written_cache() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut outputs = Vec::new();
+    for (name, format) in [("a", "pc2"), ("b", "pc2"), ("c", "exr")] {
+        let cache = dir.path().join(format!("{name}.{format}"));
+        let png = dir.path().join(format!("{name}.png"));
+        let r = run_ok(&[
+            "bake".as_ref(),
+            fixture("biped.sinew").as_os_str(),
+            "--clip".as_ref(),
+            "wave".as_ref(),
+            "--format".as_ref(),
+            format.as_ref(),
+            "-o".as_ref(),
+            cache.as_os_str(),
+            "--preview".as_ref(),
+            png.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        assert_eq!(
+            r["preview"]["frames"],
+            serde_json::json!([0, 6, 12, 18, 24, 30])
+        );
+        assert!(r["outputs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|o| o.as_str() == png.to_str()));
+        let (w, h, px) = decode(&png);
+        assert_eq!((w, h), (6 * 256, 30 + 18 + 256 + 8));
+        assert_not_blank(&px, "bake preview", 0.1);
+        outputs.push(std::fs::read(&png).unwrap());
+    }
+    assert!(outputs[0] == outputs[1], "same bytes on another run");
+    // The f16 offsets of the EXR draw (almost) the same picture as the exact PC2 floats.
+    assert_eq!(outputs[0].len() > 1000, outputs[2].len() > 1000);
+    let r = sinew([
+        "bake".as_ref(),
+        fixture("biped.sinew").as_os_str(),
+        "--format".as_ref(),
+        "pc2".as_ref(),
+        "-o".as_ref(),
+        dir.path().join("d.pc2").as_os_str(),
+        "--preview".as_ref(),
+        dir.path().join("d.gif").as_os_str(),
+    ]);
+    assert_one_line_error(&r, &dir.path().join("d.gif"));
+    assert!(
+        !dir.path().join("d.pc2").exists(),
+        "nothing written on a bad --preview"
+    );
+}

@@ -7,8 +7,10 @@
 //! - [`camera`]: front and side orthographic views fitted to a cell;
 //! - [`model`]: an asset posed through the runtime and drawn into a cell, LOD error measured;
 //! - [`sheet`]: the contact sheet of `sinew preview`;
-//! - [`mapping`]: the picture of a joint mapping (`sinew map --png`).
+//! - [`mapping`]: the picture of a joint mapping (`sinew map --png`);
+//! - [`cache`]: frames of a baked cache as written (`sinew bake --preview`).
 
+pub mod cache;
 pub mod camera;
 pub mod canvas;
 pub mod mapping;

@@ -74,6 +74,16 @@ pub enum Command {
         after_help = "Examples:\n  sinew verify walk.exr --against fixtures/biped.sinew\n  sinew verify man.pc2 --against man.sinew --json"
     )]
     Verify(VerifyArgs),
+    /// Export to glTF 2.0 (.glb or .gltf): skeleton, skin, meshes, LODs, textures, every clip sampled.
+    #[command(
+        after_help = "Examples:\n  sinew export fixtures/biped.sinew -o biped.glb\n  sinew export man.mdl -o man.gltf\n  sinew export zombie.ms3d --lod 0.5,0.25 -o zombie.glb --json\n\nDecisions (axes, units, extras, MSFT_lod): docs/export.md."
+    )]
+    Export(ExportArgs),
+    /// Draw a contact sheet PNG: rest pose front and side with the skeleton, clip poses, LODs.
+    #[command(
+        after_help = "Examples:\n  sinew preview fixtures/biped.sinew -o biped.png\n  sinew preview man.mdl --clip walk --frames 8 -o walk.png\n  sinew preview zombie.ms3d --lod 0.5,0.25 --names -o zombie.png\n\nLayout and sizes: docs/cli.md."
+    )]
+    Preview(PreviewArgs),
 }
 
 /// Import options shared by every command that reads source files.
@@ -224,6 +234,12 @@ pub struct MapArgs {
     /// Save the mapping as a file for `convert --map` (edit it freely).
     #[arg(long, value_name = "map.json")]
     pub write: Option<PathBuf>,
+    /// Draw the two skeletons side by side with a line per matched pair, as PNG.
+    #[arg(long, value_name = "OUT.png")]
+    pub png: Option<PathBuf>,
+    /// The up axis of both files for --png.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
@@ -347,6 +363,12 @@ pub struct BakeArgs {
     /// EXR: where normals go.
     #[arg(long, value_enum, default_value_t = NormalsArg::File)]
     pub normals: NormalsArg,
+    /// Also draw frames of the written cache (read back from its bytes) as PNG.
+    #[arg(long, value_name = "OUT.png")]
+    pub preview: Option<PathBuf>,
+    /// The up axis for --preview.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
     /// Import options (source files).
     #[command(flatten)]
     pub import: ImportArgs,
@@ -361,6 +383,62 @@ pub struct VerifyArgs {
     #[arg(long, value_name = "FILE")]
     pub against: PathBuf,
     /// Import options (source files).
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `sinew export`.
+#[derive(Debug, Args)]
+pub struct ExportArgs {
+    /// The file to export (any supported input).
+    pub file: PathBuf,
+    /// Output file: `.glb` (binary) or `.gltf` (JSON with the buffer embedded).
+    #[arg(short, long, value_name = "OUT.glb|OUT.gltf")]
+    pub output: PathBuf,
+    /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
+    #[arg(long, value_name = "R1,R2|none")]
+    pub lod: Option<String>,
+    /// Import options.
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// `--up` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
+pub enum UpArg {
+    /// Z for Half-Life sources (.mdl, .smd, .qc, or .sinew with game data), else Y.
+    #[default]
+    Auto,
+    /// +Y is up (glTF, MS3D, BVH, OBJ).
+    Y,
+    /// +Z is up (Half-Life).
+    Z,
+}
+
+/// `sinew preview`.
+#[derive(Debug, Args)]
+pub struct PreviewArgs {
+    /// The file to draw (any supported input).
+    pub file: PathBuf,
+    /// Output PNG.
+    #[arg(short, long, value_name = "OUT.png")]
+    pub output: PathBuf,
+    /// Draw only this clip's strip.
+    #[arg(long, value_name = "NAME")]
+    pub clip: Option<String>,
+    /// Poses per clip strip (1 to 32).
+    #[arg(long, value_name = "N", default_value_t = 6)]
+    pub frames: usize,
+    /// Write joint names beside the joints of the front rest view.
+    #[arg(long)]
+    pub names: bool,
+    /// The model's up axis.
+    #[arg(long, value_enum, default_value_t = UpArg::Auto)]
+    pub up: UpArg,
+    /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
+    #[arg(long, value_name = "R1,R2|none")]
+    pub lod: Option<String>,
+    /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
 }

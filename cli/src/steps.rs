@@ -59,6 +59,7 @@ pub fn mapping_report(m: &Mapping) -> MappingReport {
         unmatched_rig: m.unmatched_rig().iter().map(|s| s.to_string()).collect(),
         unmatched_motion: m.unmatched_motion.clone(),
         warnings: m.warnings.iter().map(diag_report).collect(),
+        picture: None,
     }
 }
 

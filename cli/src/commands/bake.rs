@@ -8,6 +8,8 @@ use anyhow::{bail, Context};
 use sinew_core::format::{self, Asset};
 use sinew_pipeline::bake::{self, BakeRequest, LayerSpec, VertexOrder};
 use sinew_pipeline::cache::vat::VatEncoding;
+use sinew_pipeline::cache::{self, Frames};
+use sinew_pipeline::preview::cache::{cache_strip, CacheStripReport};
 use sinew_pipeline::verify::{self, CacheFormat, CacheOptions, NormalsPlacement};
 use std::path::Path;
 use std::time::Instant;
@@ -45,6 +47,77 @@ struct Report<'a> {
     outputs: Vec<String>,
     seconds: f64,
     sidecar: &'a verify::Sidecar,
+    /// `--preview` only: the frames drawn.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    preview: Option<CacheStripReport>,
+}
+
+/// The `--preview` picture: frames of the cache as written (PC2 and MDD read back from their bytes;
+/// EXR from the values it stores, offsets added back to the bind pose).
+fn cache_picture(
+    baked: &bake::Baked,
+    encoded: &verify::Encoded,
+    opts: &CacheOptions,
+    args: &BakeArgs,
+    asset: &Asset,
+) -> anyhow::Result<(Vec<u8>, CacheStripReport)> {
+    let shown = args.output.display().to_string();
+    let frames: Frames = match opts.format {
+        CacheFormat::Pc2 => {
+            cache::pc2::read(&encoded.cache)
+                .with_context(|| shown.clone())?
+                .1
+        }
+        CacheFormat::Mdd => {
+            cache::mdd::read(&encoded.cache)
+                .with_context(|| shown.clone())?
+                .1
+        }
+        CacheFormat::Exr => {
+            let stored = verify::stored_positions(baked, opts);
+            let n = baked.frames.vertex_count.max(1);
+            let positions = if opts.encoding.is_offset() {
+                stored
+                    .iter()
+                    .enumerate()
+                    .map(|(i, d)| *d + baked.bind_positions.get(i % n).copied().unwrap_or_default())
+                    .collect()
+            } else {
+                stored
+            };
+            Frames {
+                positions,
+                normals: Vec::new(),
+                ..baked.frames.clone()
+            }
+        }
+    };
+    let fps = encoded.sidecar.fps;
+    let label = |f: usize| {
+        baked
+            .clips
+            .iter()
+            .find(|c| f >= c.first_frame && f < c.first_frame + c.frame_count)
+            .map(|c| {
+                let t = bake::frame_time(f - c.first_frame, c.frame_count, c.duration, fps);
+                format!("{} @ {:.3}s (frame {f})", c.name, t)
+            })
+            .unwrap_or_else(|| format!("frame {f}"))
+    };
+    let up = super::preview::up_axis(args.up, &args.file, !asset.game.is_empty());
+    let title = format!(
+        "{}  |  {} frames x {} vertices at {} fps (as stored)",
+        Path::new(&shown)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        frames.frame_count,
+        frames.vertex_count,
+        fps
+    );
+    cache_strip(&frames, &baked.indices, up, &title, label)
+        .map_err(anyhow::Error::msg)
+        .with_context(|| shown.clone())
 }
 
 /// Runs `sinew bake`.
@@ -55,6 +128,9 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         bake::check_fps(f, "").with_context(|| format!("{shown}"))?;
     }
     check_output_path(&args.output)?;
+    if let Some(p) = &args.preview {
+        super::preview::check_png_output(p)?;
+    }
     let format = match args.format {
         CacheFormatArg::Exr => CacheFormat::Exr,
         CacheFormatArg::Pc2 => CacheFormat::Pc2,
@@ -123,6 +199,13 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     files.push((&paths.sidecar, &sidecar_json));
     let obj = bake::obj(&baked);
     files.push((&paths.obj, obj.as_bytes()));
+    let picture = match &args.preview {
+        Some(p) => Some((p, cache_picture(&baked, &encoded, &opts, args, &asset)?)),
+        None => None,
+    };
+    if let Some((p, (png, _))) = &picture {
+        files.push((p.as_path(), png));
+    }
     for (p, bytes) in &files {
         write_atomic(p, bytes)?;
     }
@@ -131,6 +214,7 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         outputs: files.iter().map(|(p, _)| p.display().to_string()).collect(),
         seconds: start.elapsed().as_secs_f64(),
         sidecar: &encoded.sidecar,
+        preview: picture.as_ref().map(|(_, (_, r))| r.clone()),
     };
     if ctx.json {
         ctx.emit_json(&report)?;

@@ -1,18 +1,23 @@
 //! `sinew map RIG MOTION`: how a motion's joints bind to a rig's joints, as a table (stderr) or JSON
 //! ([`crate::report::MappingReport`]), optionally saved as a mapping file for `convert --map`.
 
+use super::preview::up_axis;
 use crate::cli::MapArgs;
 use crate::output::{write_atomic, Ctx};
 use crate::report::MappingReport;
 use crate::steps::{self, MappingFile};
 use crate::Status;
-use anyhow::bail;
+use anyhow::{bail, Context};
+use sinew_pipeline::preview::mapping::{mapping_picture, Side};
 use std::fmt::Write as _;
 
 /// Runs `sinew map`.
 pub fn run(args: &MapArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if let Some(w) = &args.write {
         crate::output::check_output_path(w)?;
+    }
+    if let Some(p) = &args.png {
+        super::preview::check_png_output(p)?;
     }
     let map = args.map.as_deref().map(MappingFile::read).transpose()?;
     let rig_label = args.rig.display().to_string();
@@ -34,13 +39,37 @@ pub fn run(args: &MapArgs, ctx: &Ctx) -> anyhow::Result<Status> {
             sinew_pipeline::mapping::write_mapping(&mapping).as_bytes(),
         )?;
     }
-    let report = steps::mapping_report(&mapping);
+    let picture = match &args.png {
+        Some(p) => {
+            let rig_side = Side {
+                skeleton: Some(rig_skel),
+                names: &[],
+                up: up_axis(args.up, &args.rig, !rig_scene.game.is_empty()),
+            };
+            let motion_side = Side {
+                skeleton: motion_scene.skeleton.as_ref(),
+                names: motion.names(),
+                up: up_axis(args.up, &args.motion, !motion_scene.game.is_empty()),
+            };
+            let (png, r) = mapping_picture(&rig_side, &motion_side, &mapping)
+                .map_err(anyhow::Error::msg)
+                .with_context(|| p.display().to_string())?;
+            write_atomic(p, &png)?;
+            Some(r)
+        }
+        None => None,
+    };
+    let mut report = steps::mapping_report(&mapping);
+    report.picture = picture;
     if ctx.json {
         ctx.emit_json(&report)?;
     } else if ctx.human() {
         eprint!("{}", human(&report));
         if let Some(w) = &args.write {
             eprintln!("mapping written to {}", w.display());
+        }
+        if let Some(p) = &args.png {
+            eprintln!("picture written to {}", p.display());
         }
     }
     Ok(Status::Success)

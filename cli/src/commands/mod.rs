@@ -3,9 +3,11 @@
 pub mod bake;
 pub mod completions;
 pub mod convert;
+pub mod export;
 pub mod inspect;
 pub mod lod;
 pub mod map;
+pub mod preview;
 pub mod split;
 pub mod verify;
 
@@ -24,5 +26,7 @@ pub fn run(command: Command, ctx: &Ctx) -> anyhow::Result<Status> {
         Command::Lod(args) => lod::run(&args, ctx),
         Command::Bake(args) => bake::run(&args, ctx),
         Command::Verify(args) => verify::run(&args, ctx),
+        Command::Export(args) => export::run(&args, ctx),
+        Command::Preview(args) => preview::run(&args, ctx),
     }
 }

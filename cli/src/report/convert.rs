@@ -43,6 +43,9 @@ pub struct MappingReport {
     pub unmatched_motion: Vec<String>,
     /// Known ambiguities (codes in docs/mapping.md).
     pub warnings: Vec<DiagnosticReport>,
+    /// `map --png` only: what the picture shows (absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub picture: Option<sinew_pipeline::preview::mapping::MapPictureReport>,
 }
 
 /// A rest/bind orientation difference above the warning threshold.

@@ -1,0 +1,18 @@
+//! Export to glTF 2.0: a decoded `.sinew` [`Asset`](sinew_core::format::Asset) as a `.glb` or `.gltf`
+//! that any glTF viewer opens, with every clip sampled through the runtime (docs/export.md).
+//!
+//! - [`buffer`]: the binary buffer, views and accessors;
+//! - [`animation`]: clips sampled frame by frame through [`sinew_core::Animator`];
+//! - [`document`]: the glTF document (nodes, skin, materials, textures, meshes, LODs, animations, extras);
+//! - [`container`]: GLB or single-file `.gltf` bytes;
+//! - [`write`]: [`export`], the entry point.
+
+pub mod animation;
+pub mod buffer;
+pub mod container;
+pub mod document;
+pub mod write;
+
+pub use container::Container;
+pub use document::{ExportImage, ExportReport};
+pub use write::{export, ExportOptions};

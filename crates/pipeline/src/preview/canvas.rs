@@ -1,0 +1,280 @@
+//! The picture being drawn: an RGBA [`tiny_skia::Pixmap`] with a depth buffer, flat-shaded triangles
+//! rasterised with a z-buffer (our own: tiny-skia draws 2D paths and has no depth test), lines and dots
+//! through tiny-skia, and PNG encoding. Everything is CPU arithmetic in a fixed order: the same calls
+//! give the same bytes.
+
+use sinew_core::glam::Vec3;
+use tiny_skia::{FillRule, LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+
+/// An sRGB colour, 8 bits per channel.
+pub type Rgb = [u8; 3];
+
+/// A pixel rectangle: x, y, width, height.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Cell {
+    /// Left edge.
+    pub x: u32,
+    /// Top edge.
+    pub y: u32,
+    /// Width.
+    pub w: u32,
+    /// Height.
+    pub h: u32,
+}
+
+/// An RGBA picture with a depth buffer.
+pub struct Canvas {
+    /// The pixels (every pixel opaque).
+    pub pixmap: Pixmap,
+    depth: Vec<f32>,
+}
+
+fn paint(c: Rgb) -> Paint<'static> {
+    let mut p = Paint::default();
+    p.set_color_rgba8(c[0], c[1], c[2], 255);
+    p.anti_alias = true;
+    p
+}
+
+impl Canvas {
+    /// A `w` x `h` canvas filled with `background`. `None` when a side is 0 or too large.
+    pub fn new(w: u32, h: u32, background: Rgb) -> Option<Canvas> {
+        if w > 16_384 || h > 16_384 {
+            return None;
+        }
+        let mut pixmap = Pixmap::new(w, h)?;
+        pixmap.fill(tiny_skia::Color::from_rgba8(
+            background[0],
+            background[1],
+            background[2],
+            255,
+        ));
+        Some(Canvas {
+            pixmap,
+            depth: vec![f32::INFINITY; w as usize * h as usize],
+        })
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.pixmap.width()
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.pixmap.height()
+    }
+
+    /// Fills a rectangle (no depth).
+    pub fn fill_rect(&mut self, cell: Cell, color: Rgb) {
+        if let Some(r) = Rect::from_xywh(cell.x as f32, cell.y as f32, cell.w as f32, cell.h as f32)
+        {
+            let mut p = paint(color);
+            p.anti_alias = false;
+            self.pixmap.fill_rect(r, &p, Transform::identity(), None);
+        }
+    }
+
+    /// Forgets all depths, so the next triangles are drawn over whatever is there.
+    pub fn clear_depth(&mut self) {
+        self.depth.fill(f32::INFINITY);
+    }
+
+    /// Draws one triangle whose corners are (pixel x, pixel y, depth; smaller depth is nearer), inside
+    /// `clip` only, both windings, with the z-buffer. A pixel is covered when its centre is inside
+    /// or on an edge.
+    pub fn triangle(&mut self, a: Vec3, b: Vec3, c: Vec3, color: Rgb, clip: Cell) {
+        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        let (b, c) = if area < 0.0 { (c, b) } else { (b, c) };
+        let area = area.abs();
+        let x0 = a.x.min(b.x).min(c.x).floor().max(clip.x as f32) as i64;
+        let y0 = a.y.min(b.y).min(c.y).floor().max(clip.y as f32) as i64;
+        let x1 = (a.x.max(b.x).max(c.x).ceil() as i64).min(i64::from(clip.x + clip.w) - 1);
+        let y1 = (a.y.max(b.y).max(c.y).ceil() as i64).min(i64::from(clip.y + clip.h) - 1);
+        let w = self.pixmap.width() as i64;
+        let x1 = x1.min(w - 1);
+        let y1 = y1.min(self.pixmap.height() as i64 - 1);
+        let edge =
+            |p: Vec3, q: Vec3, x: f32, y: f32| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+        for y in y0.max(0)..=y1 {
+            let py = y as f32 + 0.5;
+            for x in x0.max(0)..=x1 {
+                let px = x as f32 + 0.5;
+                let w0 = edge(b, c, px, py);
+                let w1 = edge(c, a, px, py);
+                let w2 = edge(a, b, px, py);
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = (w0 * a.z + w1 * b.z + w2 * c.z) / area;
+                let i = (y * w + x) as usize;
+                if z < self.depth[i] {
+                    self.depth[i] = z;
+                    let px = &mut self.pixmap.data_mut()[i * 4..i * 4 + 4];
+                    px.copy_from_slice(&[color[0], color[1], color[2], 255]);
+                }
+            }
+        }
+    }
+
+    /// An anti-aliased line `width` pixels wide (no depth).
+    pub fn line(&mut self, a: (f32, f32), b: (f32, f32), color: Rgb, width: f32) {
+        let mut pb = PathBuilder::new();
+        pb.move_to(a.0, a.1);
+        pb.line_to(b.0, b.1);
+        if let Some(path) = pb.finish() {
+            let stroke = Stroke {
+                width,
+                line_cap: LineCap::Round,
+                ..Default::default()
+            };
+            self.pixmap
+                .stroke_path(&path, &paint(color), &stroke, Transform::identity(), None);
+        }
+    }
+
+    /// A filled disc of radius `r` with a thin dark outline (no depth).
+    pub fn dot(&mut self, c: (f32, f32), r: f32, color: Rgb) {
+        if let Some(path) = PathBuilder::from_circle(c.0, c.1, r) {
+            self.pixmap.fill_path(
+                &path,
+                &paint(color),
+                FillRule::Winding,
+                Transform::identity(),
+                None,
+            );
+            let stroke = Stroke {
+                width: 1.0,
+                ..Default::default()
+            };
+            self.pixmap.stroke_path(
+                &path,
+                &paint([30, 30, 30]),
+                &stroke,
+                Transform::identity(),
+                None,
+            );
+        }
+    }
+
+    /// Blends `color` into pixel (x, y) with coverage `alpha` (0..1); outside pixels are ignored.
+    pub fn blend(&mut self, x: i64, y: i64, color: Rgb, alpha: f32) {
+        if x < 0 || y < 0 || x >= i64::from(self.width()) || y >= i64::from(self.height()) {
+            return;
+        }
+        let a = alpha.clamp(0.0, 1.0);
+        let i = (y as usize * self.width() as usize + x as usize) * 4;
+        let px = &mut self.pixmap.data_mut()[i..i + 3];
+        for (p, &c) in px.iter_mut().zip(&color) {
+            *p = (f32::from(*p) * (1.0 - a) + f32::from(c) * a).round() as u8;
+        }
+    }
+
+    /// The picture as an 8-bit RGB PNG (every pixel is opaque, so alpha is dropped).
+    pub fn png(&self) -> Result<Vec<u8>, String> {
+        let rgb: Vec<u8> = self
+            .pixmap
+            .data()
+            .chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect();
+        let mut out = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut out, self.width(), self.height());
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            enc.set_compression(png::Compression::Fast);
+            let mut w = enc.write_header().map_err(|e| e.to_string())?;
+            w.write_image_data(&rgb).map_err(|e| e.to_string())?;
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pixel(c: &Canvas, x: u32, y: u32) -> [u8; 3] {
+        let i = ((y * c.width() + x) * 4) as usize;
+        let d = c.pixmap.data();
+        [d[i], d[i + 1], d[i + 2]]
+    }
+
+    #[test]
+    fn nearer_triangle_wins_whatever_the_order() {
+        let cell = Cell {
+            x: 0,
+            y: 0,
+            w: 8,
+            h: 8,
+        };
+        for near_first in [false, true] {
+            let mut c = Canvas::new(8, 8, [0, 0, 0]).expect("canvas");
+            let far = |c: &mut Canvas| {
+                c.triangle(
+                    Vec3::new(0.0, 0.0, 5.0),
+                    Vec3::new(8.0, 0.0, 5.0),
+                    Vec3::new(0.0, 8.0, 5.0),
+                    [255, 0, 0],
+                    cell,
+                )
+            };
+            let near = |c: &mut Canvas| {
+                c.triangle(
+                    Vec3::new(0.0, 0.0, 1.0),
+                    Vec3::new(0.0, 8.0, 1.0),
+                    Vec3::new(8.0, 0.0, 1.0),
+                    [0, 255, 0],
+                    cell,
+                )
+            };
+            if near_first {
+                near(&mut c);
+                far(&mut c);
+            } else {
+                far(&mut c);
+                near(&mut c);
+            }
+            assert_eq!(pixel(&c, 1, 1), [0, 255, 0]);
+            assert_eq!(pixel(&c, 7, 7), [0, 0, 0]);
+        }
+    }
+
+    #[test]
+    fn triangles_stay_inside_their_cell() {
+        let mut c = Canvas::new(8, 8, [0, 0, 0]).expect("canvas");
+        let cell = Cell {
+            x: 0,
+            y: 0,
+            w: 4,
+            h: 8,
+        };
+        c.triangle(
+            Vec3::new(-10.0, -10.0, 0.0),
+            Vec3::new(30.0, -10.0, 0.0),
+            Vec3::new(-10.0, 30.0, 0.0),
+            [9, 9, 9],
+            cell,
+        );
+        assert_eq!(pixel(&c, 3, 3), [9, 9, 9]);
+        assert_eq!(pixel(&c, 4, 3), [0, 0, 0]);
+    }
+
+    #[test]
+    fn png_decodes_to_the_pixels() {
+        let mut c = Canvas::new(3, 2, [10, 20, 30]).expect("canvas");
+        c.blend(1, 1, [250, 250, 250], 1.0);
+        let bytes = c.png().expect("png");
+        let dec = png::Decoder::new(std::io::Cursor::new(bytes));
+        let mut r = dec.read_info().expect("header");
+        let mut buf = vec![0; r.output_buffer_size().expect("size")];
+        let info = r.next_frame(&mut buf).expect("frame");
+        assert_eq!((info.width, info.height), (3, 2));
+        assert_eq!(&buf[0..3], &[10, 20, 30]);
+        assert_eq!(&buf[12..15], &[250, 250, 250]);
+    }
+}

@@ -66,6 +66,7 @@ pub(super) struct Undo {
     pub(super) bits: Option<(usize, u8)>,
     pub(super) comps: Vec<(usize, usize, u32, f32)>,
     pub(super) key_rot: Vec<(usize, usize, Quat)>,
+    pub(super) raw: Vec<(usize, usize, Quat)>,
     pub(super) poses: Vec<(usize, usize, Transform, Affine3A, Affine3A)>,
 }
 
@@ -103,6 +104,9 @@ pub(super) struct Eval<'a> {
     /// Per component, per key: the stored integer and the value it decodes to.
     pub(super) qi: Vec<Vec<u32>>,
     pub(super) dec: Vec<Vec<f32>>,
+    /// Per rotation, per key: the rotation the decoder rebuilds from the stored components, before
+    /// normalisation (what the sampler interpolates).
+    pub(super) raw: Vec<Vec<Quat>>,
     /// Per key, per joint: the quantized clip's model rotation at that key.
     pub(super) key_rot: Vec<Vec<Quat>>,
     /// Per source time, per joint: local pose and model transform of the quantized clip.
@@ -225,6 +229,7 @@ impl<'a> Eval<'a> {
             bits,
             qi: vec![vec![0; n]; nc],
             dec: vec![vec![0.0; n]; nc],
+            raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
             key_rot: vec![vec![Quat::IDENTITY; nj]; n],
             seg_times,
             undo: Undo::default(),
@@ -313,7 +318,8 @@ impl<'a> Eval<'a> {
                     }
                     if let Some(c0) = fr {
                         let comp = &self.layout.comps[c0];
-                        let index = self.layout.index[comp.rot][k];
+                        let ri = comp.rot;
+                        let index = self.layout.index[ri][k];
                         let vals = match self.key_src[k] {
                             Some(i) if self.compensate => {
                                 let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
@@ -326,7 +332,12 @@ impl<'a> Eval<'a> {
                         }
                         self.dirty[d] |= rot_changed;
                         let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
-                        rot = normalize_rotation(raw_rotation(index, q));
+                        let raw = raw_rotation(index, q);
+                        if record {
+                            self.undo.raw.push((ri, k, self.raw[ri][k]));
+                        }
+                        self.raw[ri][k] = raw;
+                        rot = normalize_rotation(raw);
                     }
                 }
                 if changed.is_some() && n == 0 && !rot_changed {
@@ -399,12 +410,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn quat(&self, c: usize, k: usize) -> Quat {
-        let rot = self.layout.comps[c].rot;
-        let idx = self.layout.index[rot][k];
-        raw_rotation(
-            idx,
-            [self.dec[c][k], self.dec[c + 1][k], self.dec[c + 2][k]],
-        )
+        self.raw[self.layout.comps[c].rot][k]
     }
 
     /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
@@ -461,6 +467,7 @@ impl<'a> Eval<'a> {
         let nc = self.layout.comps.len();
         self.undo.comps.clear();
         self.undo.key_rot.clear();
+        self.undo.raw.clear();
         self.undo.poses.clear();
         self.undo.bits = Some((s * nc + c, self.bits[s * nc + c]));
         self.bits[s * nc + c] = bits;
@@ -503,6 +510,9 @@ impl<'a> Eval<'a> {
         for &(k, d, r) in self.undo.key_rot.iter().rev() {
             self.key_rot[k][d] = r;
         }
+        for &(r, k, q) in self.undo.raw.iter().rev() {
+            self.raw[r][k] = q;
+        }
         for &(i, d, l, a, m) in self.undo.poses.iter().rev() {
             self.local[i][d] = l;
             self.local_aff[i][d] = a;
@@ -510,6 +520,7 @@ impl<'a> Eval<'a> {
         }
         self.undo.comps.clear();
         self.undo.key_rot.clear();
+        self.undo.raw.clear();
         self.undo.poses.clear();
     }
 

@@ -13,19 +13,18 @@ use sinew_core::{Channel, Clip, Skeleton};
 
 /// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
 /// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
-/// returns the budget and the widths.
+/// returns the budget, the widths and the stored integers they give (per component, per key).
 pub(super) fn first_state(
     ctx: &Ctx,
     layout: &Layout,
     work: &Work,
     start: f32,
     compensate: bool,
-) -> Option<(f32, Vec<u8>)> {
+) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
     let passes = |budget: f32| {
         let bits = layout.first_bits(budget);
-        Eval::build(ctx, layout, work, bits.clone(), compensate, true)
-            .1
-            .then_some(bits)
+        let (e, ok) = Eval::build(ctx, layout, work, bits, compensate, true);
+        ok.then_some((e.bits, e.qi))
     };
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
@@ -49,7 +48,7 @@ pub(super) fn first_state(
             }
         }
     }
-    found.map(|bits| (budget, bits))
+    found.map(|(bits, qi)| (budget, bits, qi))
 }
 
 /// Step 3, second part: rounds of one-bit reductions over every component of every segment. A
@@ -169,11 +168,10 @@ pub(super) fn compress_work(
     let mut start = tolerance;
     for (li, (wi, layout)) in layouts.iter().enumerate() {
         let w = &works[*wi];
-        let Some((budget, bits)) = first_state(&ctx, layout, w, start, compensate) else {
+        let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate) else {
             continue;
         };
         start = budget;
-        let qi = Eval::new(&ctx, layout, w, bits.clone(), compensate).qi;
         let Some(c) = layout.encode(&bits, &qi, w, source) else {
             continue;
         };

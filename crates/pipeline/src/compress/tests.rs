@@ -124,7 +124,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
+        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e);
         assert!(

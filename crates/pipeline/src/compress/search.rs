@@ -8,6 +8,7 @@ use super::options::{
 };
 use super::quantize::Layout;
 use super::reduce::{reduce_keys, simplify_channels, Work};
+use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::{Channel, Clip, Skeleton};
 
@@ -180,22 +181,28 @@ pub(super) fn compress_work(
     firsts.sort_by_key(|f| (f.0, f.1));
     let volume = times.len() * rig.skeleton.len();
     let descended = if volume <= LARGE_CLIP { DESCENDED } else { 1 };
+    // The refinements are independent: run in parallel, the smallest kept (the first of equals
+    // in candidate order, so the result does not depend on the thread count).
+    let refined: Vec<Option<(usize, Clip)>> = firsts
+        .into_par_iter()
+        .take(descended)
+        .map(|(_, li, bits)| {
+            let (wi, layout) = &layouts[li];
+            let w = &works[*wi];
+            let mut e = Eval::new(&ctx, layout, w, bits, compensate);
+            let before = e.encode(w);
+            descend(&mut e);
+            [e.encode(w), before]
+                .into_iter()
+                .flatten()
+                .find(|c| within(src, rig, c, times, &ctx.limits))
+                .map(|c| (clip_record_size(&c), c))
+        })
+        .collect();
     let mut best: Option<(usize, Clip)> = None;
-    for (_, li, bits) in firsts.into_iter().take(descended) {
-        let (wi, layout) = &layouts[li];
-        let w = &works[*wi];
-        let mut e = Eval::new(&ctx, layout, w, bits, compensate);
-        let before = e.encode(w);
-        descend(&mut e);
-        for c in [e.encode(w), before].into_iter().flatten() {
-            if !within(src, rig, &c, times, &ctx.limits) {
-                continue;
-            }
-            let size = clip_record_size(&c);
-            if best.as_ref().is_none_or(|b| size < b.0) {
-                best = Some((size, c));
-            }
-            break;
+    for (size, c) in refined.into_iter().flatten() {
+        if best.as_ref().is_none_or(|b| size < b.0) {
+            best = Some((size, c));
         }
     }
     best.map(|b| b.1)

@@ -107,13 +107,17 @@ pub(super) struct Eval<'a> {
     /// Per rotation, per key: the rotation the decoder rebuilds from the stored components, before
     /// normalisation (what the sampler interpolates).
     pub(super) raw: Vec<Vec<Quat>>,
-    /// Per key, per joint: the quantized clip's model rotation at that key.
-    pub(super) key_rot: Vec<Vec<Quat>>,
-    /// Per source time, per joint: local pose and model transform of the quantized clip.
-    pub(super) local: Vec<Vec<Transform>>,
-    /// Per source time, per joint: `local` as an affine transform.
-    pub(super) local_aff: Vec<Vec<Affine3A>>,
-    pub(super) model: Vec<Vec<Affine3A>>,
+    /// Joint count (the stride of the per-time and per-key arrays below), and per joint its parent.
+    pub(super) nj: usize,
+    pub(super) parents: Vec<Option<usize>>,
+    /// Per key, per joint (key-major): the quantized clip's model rotation at that key.
+    pub(super) key_rot: Vec<Quat>,
+    /// Per source time, per joint (time-major): local pose and model transform of the quantized
+    /// clip.
+    pub(super) local: Vec<Transform>,
+    /// Per source time, per joint (time-major): `local` as an affine transform.
+    pub(super) local_aff: Vec<Affine3A>,
+    pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
     pub(super) seg_times: Vec<Vec<usize>>,
     pub(super) undo: Undo,
@@ -213,9 +217,13 @@ impl<'a> Eval<'a> {
             ctx,
             layout,
             compensate,
-            local: vec![base.clone(); at.len()],
-            local_aff: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
-            model: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
+            local: base.repeat(at.len()),
+            local_aff: vec![Affine3A::IDENTITY; nj * at.len()],
+            model: vec![Affine3A::IDENTITY; nj * at.len()],
+            nj,
+            parents: (0..nj)
+                .map(|j| parents.get(j).copied().flatten().map(usize::from))
+                .collect(),
             dirty: vec![true; nj],
             moved: vec![true; nj],
             at,
@@ -232,7 +240,7 @@ impl<'a> Eval<'a> {
             qi: vec![vec![0; n]; nc],
             dec: vec![vec![0.0; n]; nc],
             raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
-            key_rot: vec![vec![Quat::IDENTITY; nj]; n],
+            key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
             undo: Undo::default(),
             seen: Vec::new(),
@@ -275,14 +283,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn parent(&self, j: usize) -> Option<usize> {
-        self.ctx
-            .rig
-            .skeleton
-            .parents()
-            .get(j)
-            .copied()
-            .flatten()
-            .map(usize::from)
+        self.parents.get(j).copied().flatten()
     }
 
     /// Quantizes key `k` of segment `s` for `joints` (a joint's subtree, or all joints, in
@@ -313,7 +314,7 @@ impl<'a> Eval<'a> {
             }
             let pr = self
                 .parent(d)
-                .map_or(Quat::IDENTITY, |p| self.key_rot[k][p]);
+                .map_or(Quat::IDENTITY, |p| self.key_rot[k * self.nj + p]);
             let mut rot = self.base[d].rotation;
             let mut rot_changed = false;
             if let Some(tr) = self.track_of[d] {
@@ -355,9 +356,11 @@ impl<'a> Eval<'a> {
                 break;
             }
             if record {
-                self.undo.key_rot.push((k, d, self.key_rot[k][d]));
+                self.undo
+                    .key_rot
+                    .push((k, d, self.key_rot[k * self.nj + d]));
             }
-            self.key_rot[k][d] = pr * rot;
+            self.key_rot[k * self.nj + d] = pr * rot;
         }
     }
 
@@ -398,19 +401,19 @@ impl<'a> Eval<'a> {
                 self.undo.poses.push((
                     i,
                     d,
-                    self.local[i][d],
-                    self.local_aff[i][d],
-                    self.model[i][d],
+                    self.local[i * self.nj + d],
+                    self.local_aff[i * self.nj + d],
+                    self.model[i * self.nj + d],
                 ));
             }
             if self.dirty[d] {
                 if let Some(tr) = self.track_of[d] {
-                    self.local[i][d] = self.sampled(tr, i, self.local[i][d]);
+                    self.local[i * self.nj + d] = self.sampled(tr, i, self.local[i * self.nj + d]);
                 }
-                self.local_aff[i][d] = self.local[i][d].to_affine();
+                self.local_aff[i * self.nj + d] = self.local[i * self.nj + d].to_affine();
             }
-            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i][p]);
-            self.model[i][d] = pm * self.local_aff[i][d];
+            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
+            self.model[i * self.nj + d] = pm * self.local_aff[i * self.nj + d];
         }
     }
 
@@ -452,7 +455,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
-        let m = &self.model[i][j];
+        let m = &self.model[i * self.nj + j];
         let p = &self.ctx.rig.points[j];
         let s = &self.ctx.src[i][j];
         (0..3)
@@ -586,15 +589,15 @@ impl<'a> Eval<'a> {
             self.dec[c][k] = x;
         }
         for &(k, d, r) in self.undo.key_rot.iter().rev() {
-            self.key_rot[k][d] = r;
+            self.key_rot[k * self.nj + d] = r;
         }
         for &(r, k, q) in self.undo.raw.iter().rev() {
             self.raw[r][k] = q;
         }
         for &(i, d, l, a, m) in self.undo.poses.iter().rev() {
-            self.local[i][d] = l;
-            self.local_aff[i][d] = a;
-            self.model[i][d] = m;
+            self.local[i * self.nj + d] = l;
+            self.local_aff[i * self.nj + d] = a;
+            self.model[i * self.nj + d] = m;
         }
         self.undo.comps.clear();
         self.undo.key_rot.clear();

@@ -3,8 +3,9 @@
 use super::eval::{Ctx, Eval};
 use super::metric::{clip_extent, measure, skeleton_extent, within, Rig};
 use super::options::{
-    ClipCompressionReport, CompressOptions, DEFAULT_RELATIVE_DISTANCE, DEFAULT_RELATIVE_TOLERANCE,
-    DESCENDED, KEY_BUDGETS, LARGE_CLIP, SHORT_CLIP,
+    ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
+    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, SHORT_CLIP,
 };
 use super::quantize::Layout;
 use super::reduce::{reduce_keys, simplify_channels, Work};
@@ -140,10 +141,24 @@ pub(super) fn compress_work(
         bind_allowed,
     );
     let base = work.clone();
+    let effort = options.effort;
+    let budgets: Vec<f32> = match effort {
+        Effort::Fast => vec![FAST_KEY_BUDGET],
+        Effort::Default => KEY_BUDGETS.to_vec(),
+        Effort::Max => KEY_BUDGETS
+            .iter()
+            .chain(&MAX_EXTRA_KEY_BUDGETS)
+            .copied()
+            .collect(),
+    };
+    // The works and layouts of the default search come first, in the default's order, so that
+    // `Max` reaches the same first states for them (the ladder of each layout starts where the
+    // previous one ended) and can only add candidates.
     let mut kept_sets: Vec<Vec<usize>> = Vec::new();
     let mut works: Vec<Work> = Vec::new();
+    let mut default_works = 0;
     if options.key_reduction {
-        for &frac in &KEY_BUDGETS {
+        for (bi, &frac) in budgets.iter().enumerate() {
             let kept = reduce_keys(&base, source, rig, src, tolerance * frac);
             if !kept_sets.contains(&kept) {
                 let mut w = base.clone();
@@ -151,23 +166,38 @@ pub(super) fn compress_work(
                 works.push(w);
                 kept_sets.push(kept);
             }
+            if bi < KEY_BUDGETS.len() {
+                default_works = works.len();
+            }
         }
     } else {
         works.push(base);
+        default_works = 1;
     }
-    let layouts: Vec<(usize, Layout)> = works
-        .iter()
-        .enumerate()
-        .flat_map(|(wi, w)| {
-            segment_candidates(w.times.len())
-                .into_iter()
-                .map(move |l| (wi, Layout::new(w, rig, l, compensate)))
-        })
-        .collect();
+    // (work, layout, part of the default search)
+    let mut layouts: Vec<(usize, Layout, bool)> = Vec::new();
+    for (wi, w) in works.iter().enumerate() {
+        for l in segment_candidates(w.times.len()) {
+            layouts.push((wi, Layout::new(w, rig, l, compensate), wi < default_works));
+        }
+    }
+    if effort == Effort::Max {
+        for (wi, w) in works.iter().enumerate() {
+            let have = segment_candidates(w.times.len());
+            for l in MAX_EXTRA_SEGMENTS {
+                let l = l.clamp(1, w.times.len().max(1));
+                if !have.contains(&l) {
+                    layouts.push((wi, Layout::new(w, rig, l, compensate), false));
+                }
+            }
+        }
+        // Default layouts first (stable: their relative order is kept).
+        layouts.sort_by_key(|l| !l.2);
+    }
     // (size with the first bit widths, layout, bit widths)
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;
-    for (li, (wi, layout)) in layouts.iter().enumerate() {
+    for (li, (wi, layout, _)) in layouts.iter().enumerate() {
         let w = &works[*wi];
         let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate) else {
             continue;
@@ -180,14 +210,31 @@ pub(super) fn compress_work(
     }
     firsts.sort_by_key(|f| (f.0, f.1));
     let volume = times.len() * rig.skeleton.len();
-    let descended = if volume <= LARGE_CLIP { DESCENDED } else { 1 };
+    let descended = match effort {
+        Effort::Fast => 1,
+        _ if volume > LARGE_CLIP => 1,
+        _ => DESCENDED,
+    };
+    // Which candidates are refined: the `descended` smallest of the default search's layouts,
+    // and for `Max` also the MAX_DESCENDED smallest of all.
+    let mut defaults_taken = 0;
+    let chosen: Vec<(usize, usize, Vec<u8>)> = firsts
+        .into_iter()
+        .enumerate()
+        .filter(|(rank, f)| {
+            let core = layouts[f.1].2;
+            let take = core && defaults_taken < descended;
+            defaults_taken += usize::from(core);
+            take || (effort == Effort::Max && *rank < MAX_DESCENDED)
+        })
+        .map(|(_, f)| f)
+        .collect();
     // The refinements are independent: run in parallel, the smallest kept (the first of equals
     // in candidate order, so the result does not depend on the thread count).
-    let refined: Vec<Option<(usize, Clip)>> = firsts
+    let refined: Vec<Option<(usize, Clip)>> = chosen
         .into_par_iter()
-        .take(descended)
         .map(|(_, li, bits)| {
-            let (wi, layout) = &layouts[li];
+            let (wi, layout, _) = &layouts[li];
             let w = &works[*wi];
             let mut e = Eval::new(&ctx, layout, w, bits, compensate);
             let before = e.encode(w);

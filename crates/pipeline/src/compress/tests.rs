@@ -58,6 +58,7 @@ fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool
         tolerance: Some(tolerance),
         error_distance: Some(0.1),
         key_reduction: true,
+        effort: Effort::Default,
     };
     compress_work(
         &mut work, &source, &rig, tolerance, true, &options, compensate,

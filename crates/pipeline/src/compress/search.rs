@@ -28,26 +28,39 @@ pub(super) fn first_state(
         let (e, ok) = Eval::build(ctx, layout, work, bits, compensate, true);
         ok.then_some((e.bits, e.qi))
     };
+    // The ladder's next two rungs are measured together (in parallel): the usual outcome, the
+    // start passing and the rung above failing, then takes one round; the rungs and the answer
+    // are those of one rung at a time.
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
-    let mut found = passes(budget);
+    let (mut found, up) = rayon::join(|| passes(budget), || passes(budget * step));
     if found.is_some() {
-        for _ in 0..16 {
-            match passes(budget * step) {
-                Some(f) => {
-                    budget *= step;
-                    found = Some(f);
-                }
-                None => break,
-            }
+        let mut next = Some(up);
+        for _ in 0..8 {
+            let Some(up) = next.take() else { break };
+            let Some(f) = up else { break };
+            budget *= step;
+            found = Some(f);
+            let (b1, b2) = (budget * step, budget * step * step);
+            let (r1, r2) = rayon::join(|| passes(b1), || passes(b2));
+            let Some(f1) = r1 else { break };
+            budget = b1;
+            found = Some(f1);
+            next = Some(r2);
         }
     } else {
-        for _ in 0..40 {
-            budget /= step;
-            found = passes(budget);
-            if found.is_some() {
-                break;
+        let mut b = budget;
+        'down: for _ in 0..20 {
+            let (b1, b2) = (b / step, b / step / step);
+            let (r1, r2) = rayon::join(|| passes(b1), || passes(b2));
+            for (bx, r) in [(b1, r1), (b2, r2)] {
+                if r.is_some() {
+                    budget = bx;
+                    found = r;
+                    break 'down;
+                }
             }
+            b = b2;
         }
     }
     found.map(|(bits, qi)| (budget, bits, qi))
@@ -158,8 +171,12 @@ pub(super) fn compress_work(
     let mut works: Vec<Work> = Vec::new();
     let mut default_works = 0;
     if options.key_reduction {
-        for (bi, &frac) in budgets.iter().enumerate() {
-            let kept = reduce_keys(&base, source, rig, src, tolerance * frac);
+        // Each budget's reduction is independent of the others: computed in parallel, used in order.
+        let reduced: Vec<Vec<usize>> = budgets
+            .par_iter()
+            .map(|&frac| reduce_keys(&base, source, rig, src, tolerance * frac))
+            .collect();
+        for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
                 let mut w = base.clone();
                 w.keep(&kept);
@@ -175,10 +192,10 @@ pub(super) fn compress_work(
         default_works = 1;
     }
     // (work, layout, part of the default search)
-    let mut layouts: Vec<(usize, Layout, bool)> = Vec::new();
+    let mut plan: Vec<(usize, usize, bool)> = Vec::new();
     for (wi, w) in works.iter().enumerate() {
         for l in segment_candidates(w.times.len()) {
-            layouts.push((wi, Layout::new(w, rig, l, compensate), wi < default_works));
+            plan.push((wi, l, wi < default_works));
         }
     }
     if effort == Effort::Max {
@@ -187,13 +204,17 @@ pub(super) fn compress_work(
             for l in MAX_EXTRA_SEGMENTS {
                 let l = l.clamp(1, w.times.len().max(1));
                 if !have.contains(&l) {
-                    layouts.push((wi, Layout::new(w, rig, l, compensate), false));
+                    plan.push((wi, l, false));
                 }
             }
         }
         // Default layouts first (stable: their relative order is kept).
-        layouts.sort_by_key(|l| !l.2);
+        plan.sort_by_key(|l| !l.2);
     }
+    let layouts: Vec<(usize, Layout, bool)> = plan
+        .into_par_iter()
+        .map(|(wi, l, core)| (wi, Layout::new(&works[wi], rig, l, compensate), core))
+        .collect();
     // (size with the first bit widths, layout, bit widths)
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;

@@ -171,3 +171,53 @@ fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
     assert!(largest.windows(2).any(|p| p[0].0 != p[1].0));
     assert!(range(&split) < 0.5 * range(&largest));
 }
+
+#[test]
+fn the_same_clip_compresses_to_the_same_bytes_at_any_thread_count_and_effort() {
+    // Layouts, key reductions, first-width rungs and refinements run in parallel; the result
+    // must not depend on how many threads there are.
+    let skeleton = chain(6, 0.3);
+    let clip = swing(&skeleton, 50);
+    for effort in [Effort::Fast, Effort::Default, Effort::Max] {
+        let options = CompressOptions {
+            effort,
+            ..CompressOptions::peers()
+        };
+        let runs: Vec<(Clip, ClipCompressionReport)> = [1, 2, 3]
+            .into_iter()
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| compress_clip(&clip, Some(&skeleton), &options))
+            })
+            .collect();
+        assert!(runs[0].0.is_compressed(), "{effort:?}");
+        assert!(runs[0].1.max_error <= 0.001, "{effort:?}: {:?}", runs[0].1);
+        for r in &runs[1..] {
+            assert_eq!(r.0, runs[0].0, "{effort:?}");
+            assert_eq!(r.1, runs[0].1, "{effort:?}");
+        }
+    }
+}
+
+#[test]
+fn max_effort_is_never_larger_than_the_default() {
+    let skeleton = chain(5, 0.4);
+    for keys in [20, 45, 90] {
+        let clip = swing(&skeleton, keys);
+        let size = |effort| {
+            let options = CompressOptions {
+                effort,
+                ..CompressOptions::peers()
+            };
+            compress_clip(&clip, Some(&skeleton), &options)
+                .1
+                .compressed_bytes
+        };
+        let (fast, default, max) = (size(Effort::Fast), size(Effort::Default), size(Effort::Max));
+        assert!(max <= default, "{keys} keys: max {max} > default {default}");
+        assert!(fast > 0 && default > 0, "{keys} keys");
+    }
+}

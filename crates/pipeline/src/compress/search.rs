@@ -28,9 +28,10 @@ pub(super) fn first_state(
         let (e, ok) = Eval::build(ctx, layout, work, bits, compensate, true);
         ok.then_some((e.bits, e.qi))
     };
-    // The ladder's next two rungs are measured together (in parallel): the usual outcome, the
-    // start passing and the rung above failing, then takes one round; the rungs and the answer
-    // are those of one rung at a time.
+    // Up the ladder, the next two rungs are measured together (in parallel): the usual outcome,
+    // the start passing and the rung above failing, then takes one round, and a rung measured in
+    // vain is above a failing one, so it usually fails early too. The rungs and the answer are
+    // those of one rung at a time.
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
     let (mut found, up) = rayon::join(|| passes(budget), || passes(budget * step));
@@ -49,18 +50,14 @@ pub(super) fn first_state(
             next = Some(r2);
         }
     } else {
-        let mut b = budget;
-        'down: for _ in 0..20 {
-            let (b1, b2) = (b / step, b / step / step);
-            let (r1, r2) = rayon::join(|| passes(b1), || passes(b2));
-            for (bx, r) in [(b1, r1), (b2, r2)] {
-                if r.is_some() {
-                    budget = bx;
-                    found = r;
-                    break 'down;
-                }
+        // Down one rung at a time: a second rung measured ahead would usually pass as well, a
+        // whole measurement wasted.
+        for _ in 0..40 {
+            budget /= step;
+            found = passes(budget);
+            if found.is_some() {
+                break;
             }
-            b = b2;
         }
     }
     found.map(|(bits, qi)| (budget, bits, qi))

@@ -170,6 +170,22 @@ pub struct CompressArgs {
     /// Distance of the error points from their joint, model units [default: 0.05 x the extent].
     #[arg(long, value_name = "D")]
     pub error_distance: Option<f32>,
+    /// How hard the clip encoder searches for small clips (every effort keeps the tolerance):
+    /// `fast` tries fewer layouts, `max` more (never larger than `default`).
+    #[arg(long, value_enum, default_value_t = EffortArg::Default)]
+    pub effort: EffortArg,
+}
+
+/// `--effort`: the clip encoder's search effort.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
+pub enum EffortArg {
+    /// One key-reduction budget, the smallest candidate refined: a few times faster.
+    Fast,
+    /// The default search.
+    #[default]
+    Default,
+    /// More key budgets, segment lengths and refined candidates; slower, never larger.
+    Max,
 }
 
 /// `sinew convert`.

@@ -2,14 +2,14 @@
 //! each a thin layer over `sinew-pipeline` that adds the file name to errors and returns its part of
 //! the JSON report. Field names of the report structs are a stable interface (docs/cli.md).
 
-use crate::cli::{CompressArgs, LodArgs, SplitOpts};
+use crate::cli::{CompressArgs, EffortArg, LodArgs, SplitOpts};
 use crate::report::{
     diag_report, EntryReport, MappingReport, MotionReport, PartReport, RestDifferenceReport,
     RootScaleReport, SplitReport,
 };
 use anyhow::{anyhow, bail, Context};
 use sinew_core::Skeleton;
-use sinew_pipeline::compress::CompressOptions;
+use sinew_pipeline::compress::{CompressOptions, Effort};
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::mapping::{self, JointSet, Mapping, MatchMethod, Side};
 use sinew_pipeline::retarget::{self, RetargetOptions, REST_DIFFERENCE_WARN_DEGREES};
@@ -486,6 +486,11 @@ pub fn compress_options(args: &CompressArgs) -> anyhow::Result<Option<CompressOp
     Ok(Some(CompressOptions {
         tolerance: args.tolerance,
         error_distance: args.error_distance,
+        effort: match args.effort {
+            EffortArg::Fast => Effort::Fast,
+            EffortArg::Default => Effort::Default,
+            EffortArg::Max => Effort::Max,
+        },
         ..CompressOptions::default()
     }))
 }

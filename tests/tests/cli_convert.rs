@@ -262,6 +262,47 @@ fn outputs_are_byte_identical_across_runs_and_thread_counts() {
     assert_eq!(a, c, "--jobs 1 and --jobs 4 differ");
 }
 
+/// One file, its clips compressed in parallel inside the process (clips, candidate layouts,
+/// refinements): the same bytes with one rayon thread as with two and three, at every `--effort`.
+#[test]
+fn single_file_convert_is_byte_identical_at_any_rayon_thread_count() {
+    let mut inputs = vec![biped()];
+    inputs.extend(sinew_testdata::corpus_file("gltf/Fox.glb"));
+    let dir = tempfile::tempdir().unwrap();
+    for input in &inputs {
+        for effort in ["fast", "default", "max"] {
+            let outputs: Vec<Vec<u8>> = ["1", "2", "3"]
+                .iter()
+                .map(|threads| {
+                    let out = dir.path().join(format!("out-{threads}.sinew"));
+                    let status = std::process::Command::new(env!("CARGO_BIN_EXE_sinew-e2e"))
+                        .env("RAYON_NUM_THREADS", threads)
+                        .args(["convert", "--quiet", "--effort", effort, "-o"])
+                        .arg(&out)
+                        .arg(input)
+                        .status()
+                        .expect("running the sinew binary");
+                    assert!(status.success(), "{} --effort {effort}", input.display());
+                    std::fs::read(&out).unwrap()
+                })
+                .collect();
+            assert!(outputs[0].len() > 1000);
+            assert_eq!(
+                outputs[0],
+                outputs[1],
+                "{} {effort}: 1 vs 2",
+                input.display()
+            );
+            assert_eq!(
+                outputs[0],
+                outputs[2],
+                "{} {effort}: 1 vs 3",
+                input.display()
+            );
+        }
+    }
+}
+
 /// `map` of the CMU BVH files against the Biped fixture: the matches the Biped and CMU naming
 /// conventions call for (FORMATS.md, docs/mapping.md), the unmatched helpers, the known warnings.
 #[test]

@@ -14,6 +14,7 @@
 //! The result is checked with [`format::validate`], so compiling succeeds exactly when writing will.
 
 use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions};
+use rayon::prelude::*;
 use sinew_core::format::{self, Asset, FormatError, LodInfo, Material, SourceVertexMap};
 use sinew_core::{Clip, ClipError, Mesh};
 use sinew_scene::Scene;
@@ -145,8 +146,15 @@ pub fn compile_with(
     let mut asset = compile(scene)?;
     let mut report = CompileReport::default();
     if let Some(o) = &options.compress {
-        for clip in &mut asset.clips {
-            let (c, r) = compress_clip(clip, asset.skeleton.as_ref(), o);
+        // Clips are independent: compressed in parallel, results kept in clip order (the same
+        // bytes at any thread count).
+        let skeleton = asset.skeleton.as_ref();
+        let done: Vec<(Clip, ClipCompressionReport)> = asset
+            .clips
+            .par_iter()
+            .map(|clip| compress_clip(clip, skeleton, o))
+            .collect();
+        for (clip, (c, r)) in asset.clips.iter_mut().zip(done) {
             *clip = c;
             report.clips.push(r);
         }

@@ -66,6 +66,7 @@ pub(super) struct Undo {
     pub(super) bits: Option<(usize, u8)>,
     pub(super) comps: Vec<(usize, usize, u32, f32)>,
     pub(super) key_rot: Vec<(usize, usize, Quat)>,
+    pub(super) raw: Vec<(usize, usize, Quat)>,
     pub(super) poses: Vec<(usize, usize, Transform, Affine3A, Affine3A)>,
 }
 
@@ -103,19 +104,28 @@ pub(super) struct Eval<'a> {
     /// Per component, per key: the stored integer and the value it decodes to.
     pub(super) qi: Vec<Vec<u32>>,
     pub(super) dec: Vec<Vec<f32>>,
-    /// Per key, per joint: the quantized clip's model rotation at that key.
-    pub(super) key_rot: Vec<Vec<Quat>>,
-    /// Per source time, per joint: local pose and model transform of the quantized clip.
-    pub(super) local: Vec<Vec<Transform>>,
-    /// Per source time, per joint: `local` as an affine transform.
-    pub(super) local_aff: Vec<Vec<Affine3A>>,
-    pub(super) model: Vec<Vec<Affine3A>>,
+    /// Per rotation, per key: the rotation the decoder rebuilds from the stored components, before
+    /// normalisation (what the sampler interpolates).
+    pub(super) raw: Vec<Vec<Quat>>,
+    /// Joint count (the stride of the per-time and per-key arrays below), and per joint its parent.
+    pub(super) nj: usize,
+    pub(super) parents: Vec<Option<usize>>,
+    /// Per key, per joint (key-major): the quantized clip's model rotation at that key.
+    pub(super) key_rot: Vec<Quat>,
+    /// Per source time, per joint (time-major): local pose and model transform of the quantized
+    /// clip.
+    pub(super) local: Vec<Transform>,
+    /// Per source time, per joint (time-major): `local` as an affine transform.
+    pub(super) local_aff: Vec<Affine3A>,
+    pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
     pub(super) seg_times: Vec<Vec<usize>>,
     pub(super) undo: Undo,
     /// Per joint, during a change: its stored values changed / its model transforms changed.
     pub(super) dirty: Vec<bool>,
     pub(super) moved: Vec<bool>,
+    /// Scratch of [`Eval::set`]: per source time and joint of the change, measured already.
+    pub(super) seen: Vec<bool>,
 }
 
 impl<'a> Eval<'a> {
@@ -207,9 +217,13 @@ impl<'a> Eval<'a> {
             ctx,
             layout,
             compensate,
-            local: vec![base.clone(); at.len()],
-            local_aff: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
-            model: vec![vec![Affine3A::IDENTITY; nj]; at.len()],
+            local: base.repeat(at.len()),
+            local_aff: vec![Affine3A::IDENTITY; nj * at.len()],
+            model: vec![Affine3A::IDENTITY; nj * at.len()],
+            nj,
+            parents: (0..nj)
+                .map(|j| parents.get(j).copied().flatten().map(usize::from))
+                .collect(),
             dirty: vec![true; nj],
             moved: vec![true; nj],
             at,
@@ -225,21 +239,34 @@ impl<'a> Eval<'a> {
             bits,
             qi: vec![vec![0; n]; nc],
             dec: vec![vec![0.0; n]; nc],
-            key_rot: vec![vec![Quat::IDENTITY; nj]; n],
+            raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
+            key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
             undo: Undo::default(),
+            seen: Vec::new(),
         };
         let all: Vec<usize> = (0..nj).collect();
-        for s in 0..layout.seg_count {
-            e.requantize(s, &all, None, false);
-        }
         e.dirty.fill(true);
         e.moved.fill(true);
+        // Keys are quantized as the source times reach them (a check that fails early leaves the
+        // rest undone); every key is quantized in key order, as a whole pass would.
+        let seg_len = layout.seg_len.max(1);
+        let mut next = 0;
         for i in 0..e.at.len() {
+            let (k0, k1, a) = e.at[i];
+            let need = if a != 0.0 { k0.max(k1) } else { k0 } + 1;
+            while next < need.min(n) {
+                e.requantize_key(next / seg_len, next, &all, None, false);
+                next += 1;
+            }
             e.resample(i, &all, false);
             if check && (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j])) {
                 return (e, false);
             }
+        }
+        while next < n {
+            e.requantize_key(next / seg_len, next, &all, None, false);
+            next += 1;
         }
         (e, true)
     }
@@ -256,88 +283,84 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn parent(&self, j: usize) -> Option<usize> {
-        self.ctx
-            .rig
-            .skeleton
-            .parents()
-            .get(j)
-            .copied()
-            .flatten()
-            .map(usize::from)
+        self.parents.get(j).copied().flatten()
     }
 
-    /// Quantizes the keys of segment `s` for `joints` (a joint's subtree, or all joints, in
+    /// Quantizes key `k` of segment `s` for `joints` (a joint's subtree, or all joints, in
     /// skeleton order). `changed`: the component (of the first joint) whose bit width changed, so
     /// that only what depends on it is redone; `None` redoes everything. Sets `dirty`, and records
     /// undo information when `record`.
-    pub(super) fn requantize(
+    /// Keys of a segment are done in order; `dirty` is only ever set here, the caller clears it.
+    pub(super) fn requantize_key(
         &mut self,
         s: usize,
+        k: usize,
         joints: &[usize],
         changed: Option<usize>,
         record: bool,
     ) {
         let nc = self.layout.comps.len();
-        for &d in joints {
-            self.dirty[d] = false;
-        }
         if let Some(c) = changed.filter(|&c| self.layout.comps[c].kind != Kind::R) {
             // A translation or scale component: nothing else depends on it.
             if let Some(&j) = joints.first() {
-                for k in self.layout.seg_keys(s) {
-                    let v = self.layout.comps[c].vals[k];
-                    self.dirty[j] |= self.store(s, c, k, v, record, nc);
-                }
+                let v = self.layout.comps[c].vals[k];
+                self.dirty[j] |= self.store(s, c, k, v, record, nc);
             }
             return;
         }
-        for k in self.layout.seg_keys(s) {
-            for (n, &d) in joints.iter().enumerate() {
-                if changed.is_some() && n > 0 && !self.compensate {
-                    break;
-                }
-                let pr = self
-                    .parent(d)
-                    .map_or(Quat::IDENTITY, |p| self.key_rot[k][p]);
-                let mut rot = self.base[d].rotation;
-                let mut rot_changed = false;
-                if let Some(tr) = self.track_of[d] {
-                    let [ft, fr, fs] = self.first[tr];
-                    if changed.is_none() {
-                        for c0 in [ft, fs].into_iter().flatten() {
-                            for c in c0..c0 + 3 {
-                                let v = self.layout.comps[c].vals[k];
-                                self.dirty[d] |= self.store(s, c, k, v, record, nc);
-                            }
-                        }
-                    }
-                    if let Some(c0) = fr {
-                        let comp = &self.layout.comps[c0];
-                        let index = self.layout.index[comp.rot][k];
-                        let vals = match self.key_src[k] {
-                            Some(i) if self.compensate => {
-                                let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
-                                three_without(target, index)
-                            }
-                            _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
-                        };
-                        for (a, v) in vals.into_iter().enumerate() {
-                            rot_changed |= self.store(s, c0 + a, k, v, record, nc);
-                        }
-                        self.dirty[d] |= rot_changed;
-                        let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
-                        rot = normalize_rotation(raw_rotation(index, q));
-                    }
-                }
-                if changed.is_some() && n == 0 && !rot_changed {
-                    // The joint's rotation at this key did not change: nothing below it does.
-                    break;
-                }
-                if record {
-                    self.undo.key_rot.push((k, d, self.key_rot[k][d]));
-                }
-                self.key_rot[k][d] = pr * rot;
+        for (n, &d) in joints.iter().enumerate() {
+            if changed.is_some() && n > 0 && !self.compensate {
+                break;
             }
+            let pr = self
+                .parent(d)
+                .map_or(Quat::IDENTITY, |p| self.key_rot[k * self.nj + p]);
+            let mut rot = self.base[d].rotation;
+            let mut rot_changed = false;
+            if let Some(tr) = self.track_of[d] {
+                let [ft, fr, fs] = self.first[tr];
+                if changed.is_none() {
+                    for c0 in [ft, fs].into_iter().flatten() {
+                        for c in c0..c0 + 3 {
+                            let v = self.layout.comps[c].vals[k];
+                            self.dirty[d] |= self.store(s, c, k, v, record, nc);
+                        }
+                    }
+                }
+                if let Some(c0) = fr {
+                    let comp = &self.layout.comps[c0];
+                    let ri = comp.rot;
+                    let index = self.layout.index[ri][k];
+                    let vals = match self.key_src[k] {
+                        Some(i) if self.compensate => {
+                            let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
+                            three_without(target, index)
+                        }
+                        _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
+                    };
+                    for (a, v) in vals.into_iter().enumerate() {
+                        rot_changed |= self.store(s, c0 + a, k, v, record, nc);
+                    }
+                    self.dirty[d] |= rot_changed;
+                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
+                    let raw = raw_rotation(index, q);
+                    if record {
+                        self.undo.raw.push((ri, k, self.raw[ri][k]));
+                    }
+                    self.raw[ri][k] = raw;
+                    rot = normalize_rotation(raw);
+                }
+            }
+            if changed.is_some() && n == 0 && !rot_changed {
+                // The joint's rotation at this key did not change: nothing below it does.
+                break;
+            }
+            if record {
+                self.undo
+                    .key_rot
+                    .push((k, d, self.key_rot[k * self.nj + d]));
+            }
+            self.key_rot[k * self.nj + d] = pr * rot;
         }
     }
 
@@ -378,19 +401,19 @@ impl<'a> Eval<'a> {
                 self.undo.poses.push((
                     i,
                     d,
-                    self.local[i][d],
-                    self.local_aff[i][d],
-                    self.model[i][d],
+                    self.local[i * self.nj + d],
+                    self.local_aff[i * self.nj + d],
+                    self.model[i * self.nj + d],
                 ));
             }
             if self.dirty[d] {
                 if let Some(tr) = self.track_of[d] {
-                    self.local[i][d] = self.sampled(tr, i, self.local[i][d]);
+                    self.local[i * self.nj + d] = self.sampled(tr, i, self.local[i * self.nj + d]);
                 }
-                self.local_aff[i][d] = self.local[i][d].to_affine();
+                self.local_aff[i * self.nj + d] = self.local[i * self.nj + d].to_affine();
             }
-            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i][p]);
-            self.model[i][d] = pm * self.local_aff[i][d];
+            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
+            self.model[i * self.nj + d] = pm * self.local_aff[i * self.nj + d];
         }
     }
 
@@ -399,12 +422,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn quat(&self, c: usize, k: usize) -> Quat {
-        let rot = self.layout.comps[c].rot;
-        let idx = self.layout.index[rot][k];
-        raw_rotation(
-            idx,
-            [self.dec[c][k], self.dec[c + 1][k], self.dec[c + 2][k]],
-        )
+        self.raw[self.layout.comps[c].rot][k]
     }
 
     /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
@@ -437,7 +455,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
-        let m = &self.model[i][j];
+        let m = &self.model[i * self.nj + j];
         let p = &self.ctx.rig.points[j];
         let s = &self.ctx.src[i][j];
         (0..3)
@@ -461,32 +479,102 @@ impl<'a> Eval<'a> {
         let nc = self.layout.comps.len();
         self.undo.comps.clear();
         self.undo.key_rot.clear();
+        self.undo.raw.clear();
         self.undo.poses.clear();
         self.undo.bits = Some((s * nc + c, self.bits[s * nc + c]));
         self.bits[s * nc + c] = bits;
         self.params[s * nc + c] = self.layout.params(s, c, bits);
         let j = self.joint[self.layout.comps[c].track];
         let joints = std::mem::take(&mut self.subtree[j]);
-        self.requantize(s, &joints, Some(c), true);
         let times = std::mem::take(&mut self.seg_times[s]);
+        let worst = self.measure_change(s, c, &joints, &times, cap);
+        self.seg_times[s] = times;
+        self.subtree[j] = joints;
+        worst
+    }
+
+    /// The body of [`Eval::set`]: requantizes segment `s` for `joints` (component `c` changed) and
+    /// measures the joints that moved at `times`, interleaved so that a failing change stops early.
+    ///
+    /// The result is that of requantizing the whole segment and then measuring every time, every
+    /// joint that moved (a joint whose values changed anywhere in the segment, or below one):
+    /// - a time is measured once the keys it reads are requantized (keys go in order); a joint that
+    ///   moved by then is computed as the whole pass computes it (its values there are final);
+    /// - a joint that moves only through later keys keeps its values at that time (the keys it reads
+    ///   there did not change), so its error there is the one it had: measured after the segment.
+    fn measure_change(
+        &mut self,
+        s: usize,
+        c: usize,
+        joints: &[usize],
+        times: &[usize],
+        cap: f32,
+    ) -> f32 {
+        for &d in joints {
+            self.dirty[d] = false;
+        }
+        let keys = self.layout.seg_keys(s);
+        let mut next = keys.start;
+        let nj = joints.len();
+        let mut seen = std::mem::take(&mut self.seen);
+        seen.clear();
+        seen.resize(times.len() * nj, false);
         let mut worst = 0.0f32;
-        'times: for &i in &times {
-            self.resample(i, &joints, true);
-            for &d in &joints {
+        let mut failed = false;
+        'times: for (pos, &i) in times.iter().enumerate() {
+            let (k0, k1, a) = self.at[i];
+            let mut need = next;
+            if keys.contains(&k0) {
+                need = need.max(k0 + 1);
+            }
+            if a != 0.0 && keys.contains(&k1) {
+                need = need.max(k1 + 1);
+            }
+            while next < need {
+                self.requantize_key(s, next, joints, Some(c), true);
+                next += 1;
+            }
+            self.resample(i, joints, true);
+            for (n, &d) in joints.iter().enumerate() {
                 if !self.moved[d] {
                     continue;
                 }
+                seen[pos * nj + n] = true;
                 let r = self.joint_error(i, d) / self.ctx.limits[d];
                 if exceeds(r, cap) {
-                    worst = f32::INFINITY;
+                    failed = true;
                     break 'times;
                 }
                 worst = worst.max(r);
             }
         }
-        self.seg_times[s] = times;
-        self.subtree[j] = joints;
-        worst
+        if !failed {
+            while next < keys.end {
+                self.requantize_key(s, next, joints, Some(c), true);
+                next += 1;
+            }
+            'late: for (pos, &i) in times.iter().enumerate() {
+                for (n, &d) in joints.iter().enumerate() {
+                    let below = n > 0 && self.parent(d).is_some_and(|p| self.moved[p]);
+                    self.moved[d] = self.dirty[d] || below;
+                    if !self.moved[d] || seen[pos * nj + n] {
+                        continue;
+                    }
+                    let r = self.joint_error(i, d) / self.ctx.limits[d];
+                    if exceeds(r, cap) {
+                        failed = true;
+                        break 'late;
+                    }
+                    worst = worst.max(r);
+                }
+            }
+        }
+        self.seen = seen;
+        if failed {
+            f32::INFINITY
+        } else {
+            worst
+        }
     }
 
     /// Reverts the last [`Eval::set`].
@@ -501,15 +589,19 @@ impl<'a> Eval<'a> {
             self.dec[c][k] = x;
         }
         for &(k, d, r) in self.undo.key_rot.iter().rev() {
-            self.key_rot[k][d] = r;
+            self.key_rot[k * self.nj + d] = r;
+        }
+        for &(r, k, q) in self.undo.raw.iter().rev() {
+            self.raw[r][k] = q;
         }
         for &(i, d, l, a, m) in self.undo.poses.iter().rev() {
-            self.local[i][d] = l;
-            self.local_aff[i][d] = a;
-            self.model[i][d] = m;
+            self.local[i * self.nj + d] = l;
+            self.local_aff[i * self.nj + d] = a;
+            self.model[i * self.nj + d] = m;
         }
         self.undo.comps.clear();
         self.undo.key_rot.clear();
+        self.undo.raw.clear();
         self.undo.poses.clear();
     }
 

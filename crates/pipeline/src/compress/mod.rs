@@ -52,6 +52,7 @@ mod tests;
 
 pub use metric::{measure, skeleton_extent};
 pub use options::{
-    ClipCompressionReport, CompressOptions, DEFAULT_RELATIVE_DISTANCE, DEFAULT_RELATIVE_TOLERANCE,
+    ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
+    DEFAULT_RELATIVE_TOLERANCE,
 };
 pub use search::compress_clip;

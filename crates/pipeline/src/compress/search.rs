@@ -3,44 +3,55 @@
 use super::eval::{Ctx, Eval};
 use super::metric::{clip_extent, measure, skeleton_extent, within, Rig};
 use super::options::{
-    ClipCompressionReport, CompressOptions, DEFAULT_RELATIVE_DISTANCE, DEFAULT_RELATIVE_TOLERANCE,
-    DESCENDED, KEY_BUDGETS, LARGE_CLIP, SHORT_CLIP,
+    ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
+    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, SHORT_CLIP,
 };
 use super::quantize::Layout;
 use super::reduce::{reduce_keys, simplify_channels, Work};
+use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::{Channel, Clip, Skeleton};
 
 /// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
 /// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
-/// returns the budget and the widths.
+/// returns the budget, the widths and the stored integers they give (per component, per key).
 pub(super) fn first_state(
     ctx: &Ctx,
     layout: &Layout,
     work: &Work,
     start: f32,
     compensate: bool,
-) -> Option<(f32, Vec<u8>)> {
+) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
     let passes = |budget: f32| {
         let bits = layout.first_bits(budget);
-        Eval::build(ctx, layout, work, bits.clone(), compensate, true)
-            .1
-            .then_some(bits)
+        let (e, ok) = Eval::build(ctx, layout, work, bits, compensate, true);
+        ok.then_some((e.bits, e.qi))
     };
+    // Up the ladder, the next two rungs are measured together (in parallel): the usual outcome,
+    // the start passing and the rung above failing, then takes one round, and a rung measured in
+    // vain is above a failing one, so it usually fails early too. The rungs and the answer are
+    // those of one rung at a time.
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
-    let mut found = passes(budget);
+    let (mut found, up) = rayon::join(|| passes(budget), || passes(budget * step));
     if found.is_some() {
-        for _ in 0..16 {
-            match passes(budget * step) {
-                Some(f) => {
-                    budget *= step;
-                    found = Some(f);
-                }
-                None => break,
-            }
+        let mut next = Some(up);
+        for _ in 0..8 {
+            let Some(up) = next.take() else { break };
+            let Some(f) = up else { break };
+            budget *= step;
+            found = Some(f);
+            let (b1, b2) = (budget * step, budget * step * step);
+            let (r1, r2) = rayon::join(|| passes(b1), || passes(b2));
+            let Some(f1) = r1 else { break };
+            budget = b1;
+            found = Some(f1);
+            next = Some(r2);
         }
     } else {
+        // Down one rung at a time: a second rung measured ahead would usually pass as well, a
+        // whole measurement wasted.
         for _ in 0..40 {
             budget /= step;
             found = passes(budget);
@@ -49,7 +60,7 @@ pub(super) fn first_state(
             }
         }
     }
-    found.map(|bits| (budget, bits))
+    found.map(|(bits, qi)| (budget, bits, qi))
 }
 
 /// Step 3, second part: rounds of one-bit reductions over every component of every segment. A
@@ -140,40 +151,76 @@ pub(super) fn compress_work(
         bind_allowed,
     );
     let base = work.clone();
+    let effort = options.effort;
+    let budgets: Vec<f32> = match effort {
+        Effort::Fast => vec![FAST_KEY_BUDGET],
+        Effort::Default => KEY_BUDGETS.to_vec(),
+        Effort::Max => KEY_BUDGETS
+            .iter()
+            .chain(&MAX_EXTRA_KEY_BUDGETS)
+            .copied()
+            .collect(),
+    };
+    // The works and layouts of the default search come first, in the default's order, so that
+    // `Max` reaches the same first states for them (the ladder of each layout starts where the
+    // previous one ended) and can only add candidates.
     let mut kept_sets: Vec<Vec<usize>> = Vec::new();
     let mut works: Vec<Work> = Vec::new();
+    let mut default_works = 0;
     if options.key_reduction {
-        for &frac in &KEY_BUDGETS {
-            let kept = reduce_keys(&base, source, rig, src, tolerance * frac);
+        // Each budget's reduction is independent of the others: computed in parallel, used in order.
+        let reduced: Vec<Vec<usize>> = budgets
+            .par_iter()
+            .map(|&frac| reduce_keys(&base, source, rig, src, tolerance * frac))
+            .collect();
+        for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
                 let mut w = base.clone();
                 w.keep(&kept);
                 works.push(w);
                 kept_sets.push(kept);
             }
+            if bi < KEY_BUDGETS.len() {
+                default_works = works.len();
+            }
         }
     } else {
         works.push(base);
+        default_works = 1;
     }
-    let layouts: Vec<(usize, Layout)> = works
-        .iter()
-        .enumerate()
-        .flat_map(|(wi, w)| {
-            segment_candidates(w.times.len())
-                .into_iter()
-                .map(move |l| (wi, Layout::new(w, rig, l, compensate)))
-        })
+    // (work, layout, part of the default search)
+    let mut plan: Vec<(usize, usize, bool)> = Vec::new();
+    for (wi, w) in works.iter().enumerate() {
+        for l in segment_candidates(w.times.len()) {
+            plan.push((wi, l, wi < default_works));
+        }
+    }
+    if effort == Effort::Max {
+        for (wi, w) in works.iter().enumerate() {
+            let have = segment_candidates(w.times.len());
+            for l in MAX_EXTRA_SEGMENTS {
+                let l = l.clamp(1, w.times.len().max(1));
+                if !have.contains(&l) {
+                    plan.push((wi, l, false));
+                }
+            }
+        }
+        // Default layouts first (stable: their relative order is kept).
+        plan.sort_by_key(|l| !l.2);
+    }
+    let layouts: Vec<(usize, Layout, bool)> = plan
+        .into_par_iter()
+        .map(|(wi, l, core)| (wi, Layout::new(&works[wi], rig, l, compensate), core))
         .collect();
     // (size with the first bit widths, layout, bit widths)
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;
-    for (li, (wi, layout)) in layouts.iter().enumerate() {
+    for (li, (wi, layout, _)) in layouts.iter().enumerate() {
         let w = &works[*wi];
-        let Some((budget, bits)) = first_state(&ctx, layout, w, start, compensate) else {
+        let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate) else {
             continue;
         };
         start = budget;
-        let qi = Eval::new(&ctx, layout, w, bits.clone(), compensate).qi;
         let Some(c) = layout.encode(&bits, &qi, w, source) else {
             continue;
         };
@@ -181,23 +228,46 @@ pub(super) fn compress_work(
     }
     firsts.sort_by_key(|f| (f.0, f.1));
     let volume = times.len() * rig.skeleton.len();
-    let descended = if volume <= LARGE_CLIP { DESCENDED } else { 1 };
+    let descended = match effort {
+        Effort::Fast => 1,
+        _ if volume > LARGE_CLIP => 1,
+        _ => DESCENDED,
+    };
+    // Which candidates are refined: the `descended` smallest of the default search's layouts,
+    // and for `Max` also the MAX_DESCENDED smallest of all.
+    let mut defaults_taken = 0;
+    let chosen: Vec<(usize, usize, Vec<u8>)> = firsts
+        .into_iter()
+        .enumerate()
+        .filter(|(rank, f)| {
+            let core = layouts[f.1].2;
+            let take = core && defaults_taken < descended;
+            defaults_taken += usize::from(core);
+            take || (effort == Effort::Max && *rank < MAX_DESCENDED)
+        })
+        .map(|(_, f)| f)
+        .collect();
+    // The refinements are independent: run in parallel, the smallest kept (the first of equals
+    // in candidate order, so the result does not depend on the thread count).
+    let refined: Vec<Option<(usize, Clip)>> = chosen
+        .into_par_iter()
+        .map(|(_, li, bits)| {
+            let (wi, layout, _) = &layouts[li];
+            let w = &works[*wi];
+            let mut e = Eval::new(&ctx, layout, w, bits, compensate);
+            let before = e.encode(w);
+            descend(&mut e);
+            [e.encode(w), before]
+                .into_iter()
+                .flatten()
+                .find(|c| within(src, rig, c, times, &ctx.limits))
+                .map(|c| (clip_record_size(&c), c))
+        })
+        .collect();
     let mut best: Option<(usize, Clip)> = None;
-    for (_, li, bits) in firsts.into_iter().take(descended) {
-        let (wi, layout) = &layouts[li];
-        let w = &works[*wi];
-        let mut e = Eval::new(&ctx, layout, w, bits, compensate);
-        let before = e.encode(w);
-        descend(&mut e);
-        for c in [e.encode(w), before].into_iter().flatten() {
-            if !within(src, rig, &c, times, &ctx.limits) {
-                continue;
-            }
-            let size = clip_record_size(&c);
-            if best.as_ref().is_none_or(|b| size < b.0) {
-                best = Some((size, c));
-            }
-            break;
+    for (size, c) in refined.into_iter().flatten() {
+        if best.as_ref().is_none_or(|b| size < b.0) {
+            best = Some((size, c));
         }
     }
     best.map(|b| b.1)

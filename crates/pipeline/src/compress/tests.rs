@@ -58,6 +58,7 @@ fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool
         tolerance: Some(tolerance),
         error_distance: Some(0.1),
         key_reduction: true,
+        effort: Effort::Default,
     };
     compress_work(
         &mut work, &source, &rig, tolerance, true, &options, compensate,
@@ -124,7 +125,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
+        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e);
         assert!(
@@ -134,10 +135,9 @@ fn incremental_state_matches_a_fresh_evaluation() {
         let fresh = Eval::new(&ctx, &layout, &work, e.bits.clone(), compensate);
         assert_eq!(e.qi, fresh.qi);
         assert!(e.within() && fresh.within());
-        for (m, f) in e.model.iter().zip(&fresh.model) {
-            for (a, b) in m.iter().zip(f) {
-                assert!(a.abs_diff_eq(*b, 0.0), "{a:?} != {b:?}");
-            }
+        assert_eq!(e.model.len(), fresh.model.len());
+        for (a, b) in e.model.iter().zip(&fresh.model) {
+            assert!(a.abs_diff_eq(*b, 0.0), "{a:?} != {b:?}");
         }
     }
 }
@@ -170,4 +170,54 @@ fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
     // Largest-per-key: the first slot holds x (about 0.68) before the switch and y (0) after.
     assert!(largest.windows(2).any(|p| p[0].0 != p[1].0));
     assert!(range(&split) < 0.5 * range(&largest));
+}
+
+#[test]
+fn the_same_clip_compresses_to_the_same_bytes_at_any_thread_count_and_effort() {
+    // Layouts, key reductions, first-width rungs and refinements run in parallel; the result
+    // must not depend on how many threads there are.
+    let skeleton = chain(6, 0.3);
+    let clip = swing(&skeleton, 50);
+    for effort in [Effort::Fast, Effort::Default, Effort::Max] {
+        let options = CompressOptions {
+            effort,
+            ..CompressOptions::peers()
+        };
+        let runs: Vec<(Clip, ClipCompressionReport)> = [1, 2, 3]
+            .into_iter()
+            .map(|threads| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                pool.install(|| compress_clip(&clip, Some(&skeleton), &options))
+            })
+            .collect();
+        assert!(runs[0].0.is_compressed(), "{effort:?}");
+        assert!(runs[0].1.max_error <= 0.001, "{effort:?}: {:?}", runs[0].1);
+        for r in &runs[1..] {
+            assert_eq!(r.0, runs[0].0, "{effort:?}");
+            assert_eq!(r.1, runs[0].1, "{effort:?}");
+        }
+    }
+}
+
+#[test]
+fn max_effort_is_never_larger_than_the_default() {
+    let skeleton = chain(5, 0.4);
+    for keys in [20, 45, 90] {
+        let clip = swing(&skeleton, keys);
+        let size = |effort| {
+            let options = CompressOptions {
+                effort,
+                ..CompressOptions::peers()
+            };
+            compress_clip(&clip, Some(&skeleton), &options)
+                .1
+                .compressed_bytes
+        };
+        let (fast, default, max) = (size(Effort::Fast), size(Effort::Default), size(Effort::Max));
+        assert!(max <= default, "{keys} keys: max {max} > default {default}");
+        assert!(fast > 0 && default > 0, "{keys} keys");
+    }
 }

@@ -178,8 +178,24 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, Impo
     }
     // Our own pass first: indices the crate follows and enumerations it unwraps, which gltf-json
     // 1.4.1 can panic on instead of reporting (docs/reliability.md).
-    if let Ok(value) = serde_json::from_slice::<serde_json::Value>(json) {
-        super::refs::check(&value).map_err(|(path, message)| at(file, path, message))?;
+    match serde_json::from_slice::<serde_json::Value>(json) {
+        Ok(value) => {
+            super::refs::check(&value).map_err(|(path, message)| at(file, path, message))?;
+        }
+        // serde_json skips the keys gltf-json does not know without checking their UTF-8, so a
+        // document that is not UTF-8 would reach the crate unchecked (the fuzzer found one that then
+        // panicked in mesh.rs): glTF JSON must be UTF-8, refuse it here.
+        Err(_) => {
+            if let Err(e) = std::str::from_utf8(json) {
+                let off = e.valid_up_to();
+                return Err(ImportError::at_offset(
+                    file,
+                    "json",
+                    off as u64,
+                    "JSON is not UTF-8",
+                ));
+            }
+        }
     }
     let parsed = crate::guard::contain(|| gltf::Gltf::from_slice(json)).map_err(|m| {
         ImportError::in_section(

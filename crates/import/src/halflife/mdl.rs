@@ -353,7 +353,8 @@ pub fn read(
                 format!("{frames} frames and {blends} blends (need at least 1 frame and 1 to 16 blends)"),
             ));
         }
-        let values = (frames as u64) * (blends as u64) * (nbones as u64);
+        // A model without bones still gets a (empty) pose per frame: count frames as at least one bone.
+        let values = (frames as u64) * (blends as u64) * (nbones.max(1) as u64);
         if values > budget {
             return Err(f.err(
                 sec,

@@ -357,7 +357,7 @@ pub(super) fn sequence(s: &mut State, c: &mut Cursor) -> Result<(), ImportError>
             }
         };
         let lower = t.text.to_ascii_lowercase();
-        let starts = |p: &str| lower.len() >= p.len() && lower[..p.len()] == *p;
+        let starts = |p: &str| lower.starts_with(p);
         if t.is("{") {
             depth += 1;
         } else if t.is("}") {

@@ -101,8 +101,11 @@ pub fn activity_number(token: &str) -> i32 {
     {
         return i as i32;
     }
-    if token.len() > 4 && token[..4].eq_ignore_ascii_case("ACT_") {
-        return atoi(&token[4..]);
+    // `get` rather than indexing: the token may hold any UTF-8, and byte 4 need not start a character.
+    if let (Some(head), Some(rest)) = (token.get(..4), token.get(4..)) {
+        if head.eq_ignore_ascii_case("ACT_") && !rest.is_empty() {
+            return atoi(rest);
+        }
     }
     0
 }

@@ -446,4 +446,27 @@ fn pose_text_report_and_errors() {
         "lists the clips: {}",
         run.stderr
     );
+    // A file without a skeleton.
+    let prop = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/prop.obj");
+    let run = sinew([
+        "inspect".as_ref(),
+        prop.as_os_str(),
+        "--pose".as_ref(),
+        "walk@0".as_ref(),
+    ]);
+    assert_one_line_error(&run, &prop);
+    assert!(run.stderr.contains("no skeleton to pose"), "{}", run.stderr);
+}
+
+#[test]
+fn pose_of_a_sinew_file_keeps_undriven_joints_at_bind() {
+    // fixtures/biped.sinew: "wave" drives the upper body only, so Bip01 sits at its bind pose,
+    // T(0, 38, 0) with no rotation (fixtures/README.md), bit for bit.
+    let biped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fixtures/biped.sinew");
+    let r = pose_json(&biped, "wave@0.5", &[]);
+    assert_eq!(r["joints"].as_array().unwrap().len(), 22);
+    let root = &r["frames"][0]["joints"][0];
+    assert_eq!(root["name"], "Bip01");
+    assert_eq!(root["translation"], serde_json::json!([0.0, 38.0, 0.0]));
+    assert_eq!(root["rotation"], serde_json::json!([0.0, 0.0, 0.0, 1.0]));
 }

@@ -56,10 +56,10 @@ fn run_pose(args: &InspectArgs, spec: &str, ctx: &Ctx) -> anyhow::Result<Status>
     let shown = args.file.display();
     let req = PoseRequest::parse(spec, args.fps).map_err(anyhow::Error::msg)?;
     let asset = crate::commands::bake::load_asset(&args.file, &args.import, false)?;
-    let poses = pose::sample(&asset, &req).with_context(|| format!("{shown}"))?;
     let Some(skeleton) = &asset.skeleton else {
         anyhow::bail!("{shown}: has no skeleton to pose");
     };
+    let poses = pose::sample(&asset, &req).with_context(|| format!("{shown}"))?;
     let report = pose_report(&shown.to_string(), skeleton, &poses);
     if ctx.json {
         ctx.emit_json(&report)?;

@@ -44,6 +44,8 @@ __all__ = [
     "write_mdd",
     "verify",
     "map",
+    "export",
+    "preview",
     "run",
     "__version__",
 ]
@@ -173,4 +175,18 @@ def verify(cache: PathLike, against: PathLike, **options: Any) -> dict:
 def map(rig: PathLike, motion: PathLike, **options: Any) -> dict:  # noqa: A001 - mirrors `sinew map`
     """How a motion's joints bind to a rig's joints: the report of ``sinew map --json``."""
     _, report = run(["map", os.fspath(rig), os.fspath(motion), *_options(options)])
+    return report
+
+
+def export(src: PathLike, out: PathLike, **options: Any) -> dict:
+    """Writes ``src`` as glTF 2.0 (``out`` ending in ``.glb`` or ``.gltf``) as ``sinew export`` does;
+    returns the command's report (docs/export.md)."""
+    _, report = run(["export", os.fspath(src), "-o", os.fspath(out), *_options(options)])
+    return report
+
+
+def preview(src: PathLike, out: PathLike, **options: Any) -> dict:
+    """Draws the contact sheet of ``src`` into the PNG ``out`` as ``sinew preview`` does (options such
+    as ``clip="walk", frames=4, names=True``); returns the command's report."""
+    _, report = run(["preview", os.fspath(src), "-o", os.fspath(out), *_options(options)])
     return report

@@ -106,6 +106,20 @@ def test_map_returns_the_mapping(corpus_dir, sinew_bin):
     assert m["bound"] == sum(1 for e in m["entries"] if e["motion"] is not None)
 
 
+def test_export_and_pictures_write_the_command_lines_bytes(corpus_dir, sinew_bin, tmp_path):
+    src = corpus_dir / "gltf/Fox.glb"
+    r = sinew.export(src, tmp_path / "fox.glb")
+    assert r["animations"] == 3 and r["joints"] == 24
+    code, _, _ = cli(sinew_bin, "export", src, "-o", tmp_path / "fox_cli.glb")
+    assert code == 0
+    assert (tmp_path / "fox.glb").read_bytes() == (tmp_path / "fox_cli.glb").read_bytes()
+    p = sinew.preview(src, tmp_path / "fox.png", clip="Walk", frames=4)
+    assert (p["width"], p["rows"]) == (4 * 256, 2)
+    assert (tmp_path / "fox.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    m = sinew.map(corpus_dir / "ms3d/zombie.ms3d", corpus_dir / "bvh/cmu_walk_crlf.bvh", png=tmp_path / "m.png")
+    assert m["picture"]["width"] == 1200 and (tmp_path / "m.png").is_file()
+
+
 def test_the_gil_is_released_while_sinew_works(corpus_dir, tmp_path):
     ticks = []
     done = threading.Event()

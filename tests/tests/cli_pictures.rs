@@ -330,8 +330,11 @@ fn bake_preview_draws_the_written_cache() {
     let dir = tempfile::tempdir().unwrap();
     let mut outputs = Vec::new();
     for (name, format) in [("a", "pc2"), ("b", "pc2"), ("c", "exr")] {
-        let cache = dir.path().join(format!("{name}.{format}"));
-        let png = dir.path().join(format!("{name}.png"));
+        // The same file names in separate folders: the title names the cache file.
+        let sub = dir.path().join(name);
+        std::fs::create_dir(&sub).unwrap();
+        let cache = sub.join(format!("walk.{format}"));
+        let png = sub.join("walk.png");
         let r = run_ok(&[
             "bake".as_ref(),
             fixture("biped.sinew").as_os_str(),

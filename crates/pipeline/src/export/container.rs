@@ -100,7 +100,7 @@ pub fn base64(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::export::container::*;
 
     #[test]
     fn base64_matches_the_rfc_examples() {

@@ -127,7 +127,7 @@ impl Fit {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::preview::camera::*;
 
     #[test]
     fn fit_centres_and_scales_to_the_cell() {

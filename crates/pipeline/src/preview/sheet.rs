@@ -396,7 +396,7 @@ fn diagonal(p: &[sinew_core::glam::Vec3]) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
+    use crate::preview::sheet::*;
 
     #[test]
     fn strips_spread_over_the_clip() {

@@ -298,3 +298,21 @@ fn text_and_json_readers_refuse_huge_counts_within_the_bound() {
     eprintln!("qc frame range: peak {} KiB", peak >> 10);
     assert!(peak <= 4 << 20, "qc frame range: {peak} bytes");
 }
+
+/// EXR inputs the fuzzer found (fuzz/regressions/exr): refused, within the bound.
+#[test]
+fn exr_fuzz_regressions_are_refused_within_the_bound() {
+    let dir = fixture_path("fuzz/regressions/exr");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+        let bytes = std::fs::read(entry.path()).unwrap();
+        let _serial = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        let mut result = None;
+        let peak = peak_of(|| result = Some(sinew_pipeline::cache::vat::read_exr(&bytes)));
+        let e = result.unwrap().unwrap_err();
+        eprintln!("{}: {e}; peak {} KiB", entry.path().display(), peak >> 10);
+        assert!(peak <= bound(bytes.len()), "{peak}");
+        seen += 1;
+    }
+    assert!(seen >= 1);
+}

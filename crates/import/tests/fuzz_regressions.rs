@@ -9,9 +9,15 @@ use std::path::Path;
 const SEPARATOR: &[u8] = b"\n#sinew-fuzz-file#\n";
 
 fn replay(target: &str, format: Format, name: &str) -> Vec<(String, Result<usize, String>)> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/regressions").join(target);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/regressions")
+        .join(target);
     let mut out = Vec::new();
-    let mut files: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.path()).collect();
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
     files.sort();
     for path in files {
         let bytes = std::fs::read(&path).unwrap();

@@ -50,3 +50,21 @@ fn the_three_known_panics_are_errors_with_json_paths() {
     );
     assert_eq!(e.file, "m.gltf");
 }
+
+#[test]
+fn images_without_the_fields_gltf_unwraps_are_errors_with_json_paths() {
+    // Found by the glb fuzz target: gltf 1.4.1 image.rs unwraps an image's mimeType (in a buffer view)
+    // or uri (otherwise) when the importer asks for its source.
+    let with_image = |image: &str| {
+        doc("0", "0", "\"rotation\"").replace(
+            "\"animations\"",
+            &format!(
+                "\"bufferViews\": [{{\"buffer\": 0, \"byteLength\": 4}}], \"buffers\": [{{\"byteLength\": 4, \"uri\": \"data:application/octet-stream;base64,AAAAAA==\"}}], \"images\": [{image}], \"animations\""
+            ),
+        )
+    };
+    let e = import(&with_image("{\"bufferView\": 0}"));
+    assert_eq!(e.location, Location::JsonPath("images[0].mimeType".into()));
+    let e = import(&with_image("{\"name\": \"no source\"}"));
+    assert_eq!(e.location, Location::JsonPath("images[0].uri".into()));
+}

@@ -149,6 +149,21 @@ pub(super) fn check(root: &Value) -> Result<(), Problem> {
             "bufferView",
             c.buffer_views,
         )?;
+        // gltf's Image::source unwraps the mimeType of an image in a buffer view, and the uri of any
+        // other (the fuzzer found the first).
+        let text = |key: &str| im.get(key).is_some_and(Value::is_string);
+        if im.get("bufferView").is_some() && !text("mimeType") {
+            return Err((
+                format!("images[{i}].mimeType"),
+                "an image in a buffer view needs a mimeType string".into(),
+            ));
+        }
+        if im.get("bufferView").is_none() && !text("uri") {
+            return Err((
+                format!("images[{i}].uri"),
+                "an image needs a uri string or a bufferView".into(),
+            ));
+        }
     }
     for (i, t) in items(root, "textures") {
         index(

@@ -6,7 +6,8 @@
 use super::{cache_error, CacheError};
 
 const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
-/// Version-field flags: long names, deep data, multi-part.
+/// Version-field flags: single-part tiled, long names, deep data, multi-part.
+const TILED: u32 = 0x200;
 const LONG_NAMES: u32 = 0x400;
 const DEEP: u32 = 0x800;
 const MULTI_PART: u32 = 0x1000;
@@ -70,15 +71,29 @@ impl Cursor<'_> {
     }
 }
 
-/// One part's header: data window area, bytes per pixel over its channels, compression.
+/// One part's header: data window area and height, bytes per pixel over its channels, compression,
+/// the `chunkCount` attribute when present.
 struct Part {
     pixels: u64,
+    height: u64,
     bytes_per_pixel: u64,
     compression: u8,
+    chunk_count: Option<i64>,
+}
+
+/// Scan lines per chunk of a scanline image, by compression code.
+fn lines_per_chunk(compression: u8) -> u64 {
+    match compression {
+        0..=2 => 1,
+        3 | 5 => 16,
+        9 => 256,
+        _ => 32,
+    }
 }
 
 fn read_part(c: &mut Cursor<'_>, max_name: usize) -> Result<Option<Part>, CacheError> {
-    let mut window: Option<u64> = None;
+    let mut window: Option<(u64, u64)> = None;
+    let mut chunk_count = None;
     let mut bytes_per_pixel = 0u64;
     let mut compression = 0u8;
     let mut any = false;
@@ -110,7 +125,7 @@ fn read_part(c: &mut Cursor<'_>, max_name: usize) -> Result<Option<Part>, CacheE
                         format!("data window ({x0}, {y0})..({x1}, {y1}) is empty or inverted"),
                     ));
                 }
-                window = Some(((x1 - x0 + 1) as u64) * ((y1 - y0 + 1) as u64));
+                window = Some(((x1 - x0 + 1) as u64, (y1 - y0 + 1) as u64));
             }
             b"channels" => {
                 let mut ch = Cursor {
@@ -128,17 +143,24 @@ fn read_part(c: &mut Cursor<'_>, max_name: usize) -> Result<Option<Part>, CacheE
                 }
             }
             b"compression" => compression = value.first().copied().unwrap_or(0),
+            b"chunkCount" => {
+                chunk_count = value
+                    .get(..4)
+                    .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as i64);
+            }
             _ => {}
         }
     }
     if !any {
         return Ok(None);
     }
-    let pixels = window.ok_or_else(|| c.fail("a part without a dataWindow"))?;
+    let (width, height) = window.ok_or_else(|| c.fail("a part without a dataWindow"))?;
     Ok(Some(Part {
-        pixels,
+        pixels: width * height,
+        height,
         bytes_per_pixel,
         compression,
+        chunk_count,
     }))
 }
 
@@ -155,7 +177,9 @@ pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
     }
     let max_name = if version & LONG_NAMES != 0 { 255 } else { 31 };
     let multi = version & MULTI_PART != 0;
+    let tiled = version & TILED != 0;
     let mut declared = 0u64;
+    let mut chunks = 0u64;
     let mut parts = 0;
     while let Some(part) = read_part(&mut c, max_name)? {
         parts += 1;
@@ -175,6 +199,26 @@ pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
                 ),
             ));
         }
+        // Every chunk has an 8-byte entry in the offset tables, which must be in the file: the exr
+        // crate walks a table as long as `chunkCount` says (the fuzzer found a 1 KB file that took
+        // it past 4 GB).
+        chunks = chunks.saturating_add(match part.chunk_count {
+            Some(n) => u64::try_from(n)
+                .map_err(|_| cache_error("exr", "header", 8, format!("negative chunkCount {n}")))?,
+            None if tiled || multi => 0,
+            None => part.height.div_ceil(lines_per_chunk(part.compression)),
+        });
+        if chunks.saturating_mul(8) > bytes.len() as u64 {
+            return Err(cache_error(
+                "exr",
+                "header",
+                8,
+                format!(
+                    "the headers declare {chunks} chunks, more offsets than the {} bytes hold",
+                    bytes.len()
+                ),
+            ));
+        }
         if !multi {
             break;
         }
@@ -182,7 +226,46 @@ pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
     if parts == 0 {
         return Err(cache_error("exr", "header", 8, "no part in the file"));
     }
+    // The exr crate can read a header differently from the walk above (the fuzzer found a file where
+    // it took a second `dataWindow`, 302 million lines tall, past an attribute the walk skipped by
+    // its size): every `dataWindow` box anywhere in the file must fit as well.
+    let limit = (bytes.len() as u64).saturating_mul(expansion(u8::MAX));
+    for (at, area) in every_data_window(bytes) {
+        if area.saturating_mul(4) > limit {
+            return Err(cache_error(
+                "exr",
+                "header",
+                at as u64,
+                format!(
+                    "a dataWindow of {area} pixels, more than the {} bytes could hold",
+                    bytes.len()
+                ),
+            ));
+        }
+    }
     Ok(declared)
+}
+
+/// Offset and pixel count of every `dataWindow` box2i attribute in `bytes`.
+fn every_data_window(bytes: &[u8]) -> Vec<(usize, u64)> {
+    const KEY: &[u8] = b"dataWindow\0box2i\0";
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(i) = bytes[from..].windows(KEY.len()).position(|w| w == KEY) {
+        let at = from + i + KEY.len() + 4;
+        let v = |k: usize| {
+            bytes
+                .get(at + 4 * k..at + 4 * k + 4)
+                .map(|b| i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as i64)
+        };
+        if let (Some(x0), Some(y0), Some(x1), Some(y1)) = (v(0), v(1), v(2), v(3)) {
+            let w = (x1 - x0 + 1).max(0) as u64;
+            let h = (y1 - y0 + 1).max(0) as u64;
+            out.push((at, w * h));
+        }
+        from += i + 1;
+    }
+    out
 }
 
 #[cfg(test)]
@@ -242,6 +325,28 @@ mod tests {
             .unwrap_err()
             .message
             .contains("inverted"));
+    }
+
+    #[test]
+    fn a_chunk_count_past_the_file_is_refused() {
+        // 32 lines of ZIP16 are 2 chunks: 16 bytes of offsets.
+        let mut file = header(8, 32);
+        file.resize(4096, 0);
+        assert!(check_declared_size(&file).is_ok());
+        // A chunkCount attribute of 33,554,432 in a 4 KB file.
+        let mut counted = header(8, 32);
+        counted.pop();
+        counted.extend_from_slice(b"chunkCount\0int\0");
+        counted.extend_from_slice(&4i32.to_le_bytes());
+        counted.extend_from_slice(&0x0200_0000i32.to_le_bytes());
+        counted.push(0);
+        counted.resize(4096, 0);
+        let e = check_declared_size(&counted).unwrap_err();
+        assert!(e.message.contains("33554432 chunks"), "{e}");
+        // 100,000 lines of ZIP16 are 6,250 chunks: 50,000 bytes of offsets.
+        let mut tall = header(1, 100_000);
+        tall.resize(4096, 0);
+        assert!(check_declared_size(&tall).is_err());
     }
 
     #[test]

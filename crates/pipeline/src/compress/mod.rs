@@ -69,6 +69,6 @@ mod tests;
 pub use metric::{measure, skeleton_extent};
 pub use options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE,
+    DEFAULT_RELATIVE_TOLERANCE, PARALLEL_VOLUME,
 };
 pub use search::compress_clip;

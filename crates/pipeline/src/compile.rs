@@ -13,7 +13,7 @@
 //!
 //! The result is checked with [`format::validate`], so compiling succeeds exactly when writing will.
 
-use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions};
+use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions, PARALLEL_VOLUME};
 use rayon::prelude::*;
 use sinew_core::format::{self, Asset, FormatError, LodInfo, Material, SourceVertexMap};
 use sinew_core::{Clip, ClipError, Mesh};
@@ -148,12 +148,27 @@ pub fn compile_with(
     if let Some(o) = &options.compress {
         // Clips are independent: compressed in parallel, results kept in clip order (the same
         // bytes at any thread count).
+        // Small scenes stay on the calling thread (see `PARALLEL_VOLUME`).
         let skeleton = asset.skeleton.as_ref();
-        let done: Vec<(Clip, ClipCompressionReport)> = asset
+        let volume: usize = asset
             .clips
-            .par_iter()
-            .map(|clip| compress_clip(clip, skeleton, o))
-            .collect();
+            .iter()
+            .map(|c| c.times().len() * c.tracks().len())
+            .sum();
+        let done: Vec<(Clip, ClipCompressionReport)> =
+            if asset.clips.len() > 1 && volume >= PARALLEL_VOLUME {
+                asset
+                    .clips
+                    .par_iter()
+                    .map(|clip| compress_clip(clip, skeleton, o))
+                    .collect()
+            } else {
+                asset
+                    .clips
+                    .iter()
+                    .map(|clip| compress_clip(clip, skeleton, o))
+                    .collect()
+            };
         for (clip, (c, r)) in asset.clips.iter_mut().zip(done) {
             *clip = c;
             report.clips.push(r);

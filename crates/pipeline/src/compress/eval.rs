@@ -16,9 +16,11 @@ pub(super) struct Ctx<'a> {
     pub(super) times: &'a [f32],
     /// Per source time, per joint: the source's error points.
     pub(super) src: Vec<Vec<[Vec3; 3]>>,
-    /// Per source time, per joint: the source's model-space rotation (the product of the local
-    /// rotations down the chain).
-    pub(super) src_rot: Vec<Vec<Quat>>,
+    /// `src` flattened (time-major, `nj` joints per time): what [`Eval`] reads in its loops.
+    pub(super) src_flat: Vec<[Vec3; 3]>,
+    /// Per source time, per joint (time-major): the source's model-space rotation (the product of
+    /// the local rotations down the chain).
+    pub(super) src_rot: Vec<Quat>,
     /// Per joint: the largest error allowed.
     pub(super) limits: Vec<f32>,
     /// Every scale of the source poses is positive and uniform, so that model-space rotations are
@@ -33,7 +35,7 @@ impl<'a> Ctx<'a> {
         let parents = rig.skeleton.parents();
         let src_rot = poses
             .iter()
-            .map(|pose| {
+            .flat_map(|pose| {
                 let mut out: Vec<Quat> = Vec::with_capacity(pose.len());
                 for (j, t) in pose.iter().enumerate() {
                     let p = parents.get(j).copied().flatten().map(usize::from);
@@ -43,6 +45,7 @@ impl<'a> Ctx<'a> {
                 out
             })
             .collect();
+        let src_flat = src.iter().flatten().copied().collect();
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
         let uniform = poses.iter().flatten().all(|t| {
             let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
@@ -53,6 +56,7 @@ impl<'a> Ctx<'a> {
             like,
             times,
             src,
+            src_flat,
             src_rot,
             limits,
             uniform,
@@ -333,7 +337,8 @@ impl<'a> Eval<'a> {
                     let index = self.layout.index[ri][k];
                     let vals = match self.key_src[k] {
                         Some(i) if self.compensate => {
-                            let target = (pr.inverse() * self.ctx.src_rot[i][d]).normalize();
+                            let target =
+                                (pr.inverse() * self.ctx.src_rot[i * self.nj + d]).normalize();
                             three_without(target, index)
                         }
                         _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
@@ -457,7 +462,7 @@ impl<'a> Eval<'a> {
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
         let m = &self.model[i * self.nj + j];
         let p = &self.ctx.rig.points[j];
-        let s = &self.ctx.src[i][j];
+        let s = &self.ctx.src_flat[i * self.nj + j];
         (0..3)
             .map(|x| m.transform_point3(p[x]).distance(s[x]))
             .fold(0.0f32, f32::max)

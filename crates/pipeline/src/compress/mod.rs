@@ -35,6 +35,22 @@
 //!    smallest after the first widths get step 4's refinement, and the smallest result that the
 //!    runtime sampler measures within the limits is kept.
 //!
+//! `CompressOptions::effort` ([`Effort`]) sets how many candidates step 5 tries: `Fast` one
+//! key budget and one refinement, `Max` more budgets, segment lengths and refinements after the
+//! default's own (so never a larger result).
+//!
+//! # Speed, and the same bytes at any thread count
+//!
+//! - The error is kept up to date incrementally (`eval.rs`): a tentative width change requantizes
+//!   only its segment's keys of the joint's subtree, and re-measures only the source times that
+//!   read the segment, time by time as its keys are requantized, stopping at the first time over
+//!   the round's threshold (a failed try costs a fraction of a full one; the decision is the one a
+//!   whole pass would make). First-width checks likewise quantize keys as the times reach them.
+//! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
+//!   layouts, the next two rungs of a first-width ladder, and the refinements of the best
+//!   candidates. Every result is collected in a fixed order and the choices are the sequential
+//!   ones, so the output does not depend on the thread count (tests compare 1, 2 and 3 threads).
+//!
 //! The limits are per joint: the tolerance less a margin for f32 noise (a few ulps of the joint's
 //! model-space coordinates), so that an independent measurement against the source data also stays
 //! within the tolerance on models far from the origin.
@@ -53,6 +69,6 @@ mod tests;
 pub use metric::{measure, skeleton_extent};
 pub use options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE,
+    DEFAULT_RELATIVE_TOLERANCE, PARALLEL_VOLUME,
 };
 pub use search::compress_clip;

@@ -16,6 +16,10 @@ pub(super) const SHORT_CLIP: usize = 256;
 /// quantization); the smallest result is kept.
 pub(super) const KEY_BUDGETS: [f32; 4] = [0.3, 0.5, 0.7, 0.85];
 
+/// Clips with fewer source keys x joints than this are compressed on the calling thread alone:
+/// handing their few milliseconds of work to the thread pool (starting it, waking its threads)
+/// costs more than it saves, most of all on a loaded machine.
+pub const PARALLEL_VOLUME: usize = 1024;
 /// Key-reduction budget of [`Effort::Fast`] (the one budget it tries).
 pub(super) const FAST_KEY_BUDGET: f32 = 0.5;
 /// Key-reduction budgets [`Effort::Max`] tries after [`KEY_BUDGETS`].

@@ -5,13 +5,26 @@ use super::metric::{clip_extent, measure, skeleton_extent, within, Rig};
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
     DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
-    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, SHORT_CLIP,
+    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::Layout;
 use super::reduce::{reduce_keys, simplify_channels, Work};
 use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::{Channel, Clip, Skeleton};
+
+/// `f` over `items`, in order; in parallel (rayon) when `par`. The same results either way.
+fn map_in_order<T: Send, R: Send>(
+    items: Vec<T>,
+    par: bool,
+    f: impl Fn(T) -> R + Sync + Send,
+) -> Vec<R> {
+    if par {
+        items.into_par_iter().map(f).collect()
+    } else {
+        items.into_iter().map(f).collect()
+    }
+}
 
 /// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
 /// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
@@ -22,6 +35,7 @@ pub(super) fn first_state(
     work: &Work,
     start: f32,
     compensate: bool,
+    par: bool,
 ) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
     let passes = |budget: f32| {
         let bits = layout.first_bits(budget);
@@ -34,7 +48,14 @@ pub(super) fn first_state(
     // those of one rung at a time.
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
-    let (mut found, up) = rayon::join(|| passes(budget), || passes(budget * step));
+    let both = |a: f32, b: f32| {
+        if par {
+            rayon::join(|| passes(a), || passes(b))
+        } else {
+            (passes(a), passes(b))
+        }
+    };
+    let (mut found, up) = both(budget, budget * step);
     if found.is_some() {
         let mut next = Some(up);
         for _ in 0..8 {
@@ -43,7 +64,7 @@ pub(super) fn first_state(
             budget *= step;
             found = Some(f);
             let (b1, b2) = (budget * step, budget * step * step);
-            let (r1, r2) = rayon::join(|| passes(b1), || passes(b2));
+            let (r1, r2) = both(b1, b2);
             let Some(f1) = r1 else { break };
             budget = b1;
             found = Some(f1);
@@ -152,6 +173,7 @@ pub(super) fn compress_work(
     );
     let base = work.clone();
     let effort = options.effort;
+    let par = times.len() * rig.skeleton.len() >= PARALLEL_VOLUME;
     let budgets: Vec<f32> = match effort {
         Effort::Fast => vec![FAST_KEY_BUDGET],
         Effort::Default => KEY_BUDGETS.to_vec(),
@@ -169,10 +191,9 @@ pub(super) fn compress_work(
     let mut default_works = 0;
     if options.key_reduction {
         // Each budget's reduction is independent of the others: computed in parallel, used in order.
-        let reduced: Vec<Vec<usize>> = budgets
-            .par_iter()
-            .map(|&frac| reduce_keys(&base, source, rig, src, tolerance * frac))
-            .collect();
+        let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| {
+            reduce_keys(&base, source, rig, src, tolerance * frac)
+        });
         for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
                 let mut w = base.clone();
@@ -208,16 +229,15 @@ pub(super) fn compress_work(
         // Default layouts first (stable: their relative order is kept).
         plan.sort_by_key(|l| !l.2);
     }
-    let layouts: Vec<(usize, Layout, bool)> = plan
-        .into_par_iter()
-        .map(|(wi, l, core)| (wi, Layout::new(&works[wi], rig, l, compensate), core))
-        .collect();
+    let layouts: Vec<(usize, Layout, bool)> = map_in_order(plan, par, |(wi, l, core)| {
+        (wi, Layout::new(&works[wi], rig, l, compensate), core)
+    });
     // (size with the first bit widths, layout, bit widths)
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;
     for (li, (wi, layout, _)) in layouts.iter().enumerate() {
         let w = &works[*wi];
-        let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate) else {
+        let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate, par) else {
             continue;
         };
         start = budget;
@@ -249,21 +269,18 @@ pub(super) fn compress_work(
         .collect();
     // The refinements are independent: run in parallel, the smallest kept (the first of equals
     // in candidate order, so the result does not depend on the thread count).
-    let refined: Vec<Option<(usize, Clip)>> = chosen
-        .into_par_iter()
-        .map(|(_, li, bits)| {
-            let (wi, layout, _) = &layouts[li];
-            let w = &works[*wi];
-            let mut e = Eval::new(&ctx, layout, w, bits, compensate);
-            let before = e.encode(w);
-            descend(&mut e);
-            [e.encode(w), before]
-                .into_iter()
-                .flatten()
-                .find(|c| within(src, rig, c, times, &ctx.limits))
-                .map(|c| (clip_record_size(&c), c))
-        })
-        .collect();
+    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(_, li, bits)| {
+        let (wi, layout, _) = &layouts[li];
+        let w = &works[*wi];
+        let mut e = Eval::new(&ctx, layout, w, bits, compensate);
+        let before = e.encode(w);
+        descend(&mut e);
+        [e.encode(w), before]
+            .into_iter()
+            .flatten()
+            .find(|c| within(src, rig, c, times, &ctx.limits))
+            .map(|c| (clip_record_size(&c), c))
+    });
     let mut best: Option<(usize, Clip)> = None;
     for (size, c) in refined.into_iter().flatten() {
         if best.as_ref().is_none_or(|b| size < b.0) {

@@ -125,7 +125,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate).unwrap();
+        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate, true).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e);
         assert!(
@@ -176,8 +176,10 @@ fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
 fn the_same_clip_compresses_to_the_same_bytes_at_any_thread_count_and_effort() {
     // Layouts, key reductions, first-width rungs and refinements run in parallel; the result
     // must not depend on how many threads there are.
-    let skeleton = chain(6, 0.3);
-    let clip = swing(&skeleton, 50);
+    // 8 joints x 130 keys: above PARALLEL_VOLUME, so the parallel paths run.
+    let skeleton = chain(8, 0.3);
+    let clip = swing(&skeleton, 130);
+    assert!(clip.times().len() * skeleton.len() >= PARALLEL_VOLUME);
     for effort in [Effort::Fast, Effort::Default, Effort::Max] {
         let options = CompressOptions {
             effort,

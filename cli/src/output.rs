@@ -53,9 +53,20 @@ pub fn print_json<T: Serialize>(report: &T) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// An error and its causes on one line (`outer: inner: innermost`), with any newline flattened.
+/// An error and its causes on one line (`outer: inner: innermost`), with any newline flattened and
+/// other control characters (a file's bytes quoted in a message: form feeds, escapes) written escaped,
+/// so that a log reader splitting lines gets one.
 pub fn one_line(err: &anyhow::Error) -> String {
-    format!("{err:#}").replace(['\r', '\n'], " ")
+    let text = format!("{err:#}");
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\r' | '\n' => out.push(' '),
+            c if c.is_control() => out.extend(c.escape_debug()),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// Checks that `path` can be an output file: its directory exists and it is not itself a directory.
@@ -107,6 +118,15 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         .map_err(|e| e.error)
         .with_context(|| format!("{}: renaming the temporary file into place", path.display()))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod one_line_tests {
+    #[test]
+    fn newlines_become_spaces_and_other_controls_are_escaped() {
+        let e = anyhow::anyhow!("a\nb\u{c}c\u{1b}d").context("m.gltf");
+        assert_eq!(super::one_line(&e), "m.gltf: a b\\u{c}c\\u{1b}d");
+    }
 }
 
 #[cfg(test)]

@@ -74,3 +74,12 @@ fn a_gltf_with_a_key_that_is_not_utf8_is_refused_before_the_gltf_crate_sees_it()
     let e = results[0].1.as_ref().unwrap_err();
     assert_eq!(e, "m.gltf: json at byte 65: JSON is not UTF-8");
 }
+
+#[test]
+fn a_sinew_game_section_with_billions_of_empty_skin_families_is_refused() {
+    // Checksums made consistent (the sinew fuzz target rewrites them so mutations reach the decoders).
+    let results = replay("sinew", Format::Sinew, "m.sinew");
+    assert_eq!(results.len(), 1);
+    let e = results[0].1.as_ref().unwrap_err();
+    assert!(e.contains("skin families without slots"), "{e}");
+}

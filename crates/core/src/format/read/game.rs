@@ -9,6 +9,9 @@ use crate::format::game::{
 use crate::format::write::GAME_CLIP_RECORD;
 use crate::format::NO_STRING;
 
+/// Most skin families a GAME section may declare when they have no slots (GoldSrc allows 100).
+pub const MAX_EMPTY_SKIN_FAMILIES: u64 = 256;
+
 fn vec3(b: &[u8]) -> [f32; 3] {
     let mut f = f32s_of(b);
     [
@@ -145,6 +148,17 @@ pub(super) fn game(c: &mut Cur, strs: &Strs) -> Result<GameData> {
         });
     }
     c.align()?;
+    // With no slots the families take no bytes, so their count is not bounded by the file: a family
+    // without slots is only kept up to MAX_EMPTY_SKIN_FAMILIES (the fuzzer found a count that asked
+    // for 103 GB).
+    if slots == 0 && families > MAX_EMPTY_SKIN_FAMILIES {
+        return Err(c.err_at(
+            c.pos,
+            K::Invalid(format!(
+                "{families} skin families without slots (at most {MAX_EMPTY_SKIN_FAMILIES})"
+            )),
+        ));
+    }
     let table = c.elements(families.saturating_mul(slots), 4, "skin table")?;
     let table_base = c.pos - table.len();
     if slots > 0 {

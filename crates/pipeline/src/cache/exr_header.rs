@@ -164,9 +164,17 @@ fn read_part(c: &mut Cursor<'_>, max_name: usize) -> Result<Option<Part>, CacheE
     }))
 }
 
-/// Checks that the pixels the headers declare could have been stored in `bytes`; returns the
-/// declared pixel bytes of all parts.
+/// Checks that the pixels the headers declare could have been stored in `bytes`, as sinew's own walk
+/// of the headers reads them and as the exr crate does; returns the declared pixel bytes of all parts
+/// (by the walk).
 pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
+    let declared = walk(bytes)?;
+    check_as_the_crate_reads(bytes)?;
+    Ok(declared)
+}
+
+/// sinew's own walk of the headers.
+fn walk(bytes: &[u8]) -> Result<u64, CacheError> {
     let mut c = Cursor { bytes, at: 0 };
     if c.take(4)? != MAGIC {
         return Err(cache_error("exr", "header", 0, "not an OpenEXR file"));
@@ -246,6 +254,39 @@ pub fn check_declared_size(bytes: &[u8]) -> Result<u64, CacheError> {
     Ok(declared)
 }
 
+/// The exr crate's own reading of the headers (no pixels read yet): what it will allocate for.
+fn check_as_the_crate_reads(bytes: &[u8]) -> Result<(), CacheError> {
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        .map_err(|e| cache_error("exr", "header", 0, e.to_string()))?;
+    let mut crate_pixel_bytes = 0u64;
+    let mut crate_chunks = 0u64;
+    for h in &meta.headers {
+        let per_pixel: u64 = h
+            .channels
+            .list
+            .iter()
+            .map(|c| c.sample_type.bytes_per_sample() as u64)
+            .sum();
+        let area = (h.layer_size.0 as u64).saturating_mul(h.layer_size.1 as u64);
+        crate_pixel_bytes = crate_pixel_bytes.saturating_add(area.saturating_mul(per_pixel.max(1)));
+        crate_chunks = crate_chunks.saturating_add(h.chunk_count as u64);
+    }
+    let most = (bytes.len() as u64).saturating_mul(expansion(u8::MAX));
+    if crate_pixel_bytes > most || crate_chunks.saturating_mul(8) > bytes.len() as u64 {
+        return Err(cache_error(
+            "exr",
+            "header",
+            8,
+            format!(
+                "the headers declare {crate_pixel_bytes} bytes of pixels in {crate_chunks} chunks, \
+                 more than {} bytes could hold",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Offset and pixel count of every `dataWindow` box2i attribute in `bytes`.
 fn every_data_window(bytes: &[u8]) -> Vec<(usize, u64)> {
     const KEY: &[u8] = b"dataWindow\0box2i\0";
@@ -309,7 +350,7 @@ mod tests {
     fn declared_bytes_are_width_height_and_channels() {
         let mut file = header(64, 32);
         file.resize(4096, 0);
-        assert_eq!(check_declared_size(&file).unwrap(), 64 * 32 * 3 * 4);
+        assert_eq!(walk(&file).unwrap(), 64 * 32 * 3 * 4);
     }
 
     #[test]
@@ -317,14 +358,11 @@ mod tests {
         // 4096 bytes of ZIP can hold at most 4096 * 1032 bytes of pixels.
         let mut file = header(1 << 20, 1 << 10);
         file.resize(4096, 0);
-        let e = check_declared_size(&file).unwrap_err();
+        let e = walk(&file).unwrap_err();
         assert!(e.message.contains("12884901888 bytes"), "{e}");
         let mut inverted = header(0, 10);
         inverted.resize(4096, 0);
-        assert!(check_declared_size(&inverted)
-            .unwrap_err()
-            .message
-            .contains("inverted"));
+        assert!(walk(&inverted).unwrap_err().message.contains("inverted"));
     }
 
     #[test]
@@ -332,7 +370,7 @@ mod tests {
         // 32 lines of ZIP16 are 2 chunks: 16 bytes of offsets.
         let mut file = header(8, 32);
         file.resize(4096, 0);
-        assert!(check_declared_size(&file).is_ok());
+        assert!(walk(&file).is_ok());
         // A chunkCount attribute of 33,554,432 in a 4 KB file.
         let mut counted = header(8, 32);
         counted.pop();
@@ -341,19 +379,19 @@ mod tests {
         counted.extend_from_slice(&0x0200_0000i32.to_le_bytes());
         counted.push(0);
         counted.resize(4096, 0);
-        let e = check_declared_size(&counted).unwrap_err();
+        let e = walk(&counted).unwrap_err();
         assert!(e.message.contains("33554432 chunks"), "{e}");
         // 100,000 lines of ZIP16 are 6,250 chunks: 50,000 bytes of offsets.
         let mut tall = header(1, 100_000);
         tall.resize(4096, 0);
-        assert!(check_declared_size(&tall).is_err());
+        assert!(walk(&tall).is_err());
     }
 
     #[test]
     fn truncated_headers_are_errors() {
         let file = header(8, 8);
         for n in 0..file.len() {
-            assert!(check_declared_size(&file[..n]).is_err(), "{n}");
+            assert!(walk(&file[..n]).is_err(), "{n}");
         }
     }
 }

@@ -494,3 +494,18 @@ pub fn compress_options(args: &CompressArgs) -> anyhow::Result<Option<CompressOp
         ..CompressOptions::default()
     }))
 }
+
+/// LOD options for a `--lod R1,R2|none` spec with the default error limit and influences (`export`,
+/// `preview`); `None` when no spec was given (inside, `None` for `none`).
+pub fn lod_spec_options(
+    spec: Option<&str>,
+) -> anyhow::Result<Option<Option<sinew_pipeline::lod::LodOptions>>> {
+    spec.map(|spec| {
+        lod_options(&crate::cli::LodArgs {
+            lod: spec.to_string(),
+            lod_max_error: sinew_pipeline::lod::DEFAULT_MAX_ERROR,
+            lod_influences: 4,
+        })
+    })
+    .transpose()
+}

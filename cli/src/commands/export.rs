@@ -39,14 +39,7 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         .and_then(Container::from_extension)
         .with_context(|| format!("{out_shown}: the output must end in .glb or .gltf"))?;
     check_output_path(&args.output)?;
-    let lods = match &args.lod {
-        Some(spec) => Some(crate::steps::lod_options(&crate::cli::LodArgs {
-            lod: spec.clone(),
-            lod_max_error: sinew_pipeline::lod::DEFAULT_MAX_ERROR,
-            lod_influences: 4,
-        })?),
-        None => None,
-    };
+    let lods = crate::steps::lod_spec_options(args.lod.as_deref())?;
     let loaded = load(&args.file, &args.import, lods.as_ref())?;
     let shown = args.file.display().to_string();
     let game = crate::report::game::game_report(&loaded.asset.game)

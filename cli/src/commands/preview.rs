@@ -62,14 +62,7 @@ pub fn check_png_output(path: &Path) -> anyhow::Result<()> {
 /// Runs `sinew preview`.
 pub fn run(args: &PreviewArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     check_png_output(&args.output)?;
-    let lods = match &args.lod {
-        Some(spec) => Some(crate::steps::lod_options(&crate::cli::LodArgs {
-            lod: spec.clone(),
-            lod_max_error: sinew_pipeline::lod::DEFAULT_MAX_ERROR,
-            lod_influences: 4,
-        })?),
-        None => None,
-    };
+    let lods = crate::steps::lod_spec_options(args.lod.as_deref())?;
     let shown = args.file.display().to_string();
     let loaded = super::export::load(&args.file, &args.import, lods.as_ref())?;
     let up = up_axis(args.up, &args.file, !loaded.asset.game.is_empty());

@@ -13,6 +13,12 @@
 //! `bias + scale * q` where, with `lo = min + extent * smin / 255` and `ext = extent * sext / 255`,
 //! `scale = ext / (2^bits - 1)` and `bias = lo` (for `bits == 0`: `scale = 0`, `bias = lo + ext / 2`).
 //! See docs/format.md for the byte layout.
+//!
+//! A rotation's 2-bit index is stored per key, or once per segment when every key of the segment
+//! drops the same component ([`QuantizedParts::rotation_index`]); with the usual smallest-three
+//! hysteresis that is most segments, and it saves two bits per rotation and key. Rotation
+//! component ranges of such *compact* clips are multiples of 2^-15 ([`compact_rotation_range`]), so
+//! that a file stores them in 16 bits each.
 
 use glam::{Quat, Vec4};
 
@@ -20,6 +26,52 @@ use glam::{Quat, Vec4};
 pub const MAX_BITS: u8 = 24;
 /// Bits of the index of the largest quaternion component stored before each rotation.
 pub const ROTATION_INDEX_BITS: u32 = 2;
+/// [`QuantizedParts::rotation_index`] entry of a rotation whose index is stored in every key.
+pub const INDEX_PER_KEY: u8 = 255;
+/// Rotation ranges of compact clips are multiples of `1 / RANGE_UNITS`.
+pub const RANGE_UNITS: f32 = 32768.0;
+
+/// The smallest range `[min, extent]` that covers `lo ..= hi` and whose `min + 1` and `extent` are
+/// multiples of 2^-15 below 2 (so a file stores each in 16 bits: `min = q / 2^15 - 1`,
+/// `extent = q / 2^15`); `None` when `lo ..= hi` is not inside that span (not a smallest-three
+/// rotation component).
+pub fn compact_rotation_range(lo: f32, hi: f32) -> Option<[f32; 2]> {
+    if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+        return None;
+    }
+    let qmin = ((lo + 1.0) * RANGE_UNITS).floor();
+    if !(0.0..=65535.0).contains(&qmin) {
+        return None;
+    }
+    let min = qmin / RANGE_UNITS - 1.0;
+    let mut qext = ((hi - min) * RANGE_UNITS).ceil().max(0.0);
+    // Rounding in `hi - min` may leave the top a step short.
+    while qext <= 65535.0 && min + qext / RANGE_UNITS < hi {
+        qext += 1.0;
+    }
+    if qext > 65535.0 {
+        return None;
+    }
+    Some([min, qext / RANGE_UNITS])
+}
+
+/// The 16-bit form of a range [`compact_rotation_range`] gives, if it is one.
+pub fn compact_range_units(range: [f32; 2]) -> Option<[u16; 2]> {
+    let qmin = (range[0] + 1.0) * RANGE_UNITS;
+    let qext = range[1] * RANGE_UNITS;
+    let ok = |q: f32| (0.0..=65535.0).contains(&q) && q.fract() == 0.0;
+    let back = [qmin / RANGE_UNITS - 1.0, qext / RANGE_UNITS];
+    (ok(qmin) && ok(qext) && back[0].to_bits() == range[0].to_bits() && back[1] == range[1])
+        .then_some([qmin as u16, qext as u16])
+}
+
+/// The range a 16-bit pair of a compact clip stands for.
+pub fn range_from_units(units: [u16; 2]) -> [f32; 2] {
+    [
+        f32::from(units[0]) / RANGE_UNITS - 1.0,
+        f32::from(units[1]) / RANGE_UNITS,
+    ]
+}
 
 /// One component's parameters inside one segment.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -41,6 +93,10 @@ pub struct QuantizedParts {
     pub ranges: Vec<[f32; 2]>,
     /// Per segment, per component (segment-major): `segments[s * components + c]`.
     pub segments: Vec<SegmentComponent>,
+    /// Per segment, per rotation (segment-major, rotations in component order): the index of the
+    /// dropped component for every key of the segment (`0..=3`), or [`INDEX_PER_KEY`] when each key
+    /// stores its own. Empty: every key stores every index (files before 1.4).
+    pub rotation_index: Vec<u8>,
     /// The bit records of all segments; each segment starts at a byte boundary and holds exactly
     /// `ceil(record_bits * keys / 8)` bytes.
     pub data: Vec<u8>,
@@ -55,6 +111,9 @@ pub(crate) struct Dec {
     pub(crate) mask: u32,
     pub(crate) scale: f32,
     pub(crate) bias: f32,
+    /// For the first component of a rotation: the segment's shared index (`0..=3`), or
+    /// [`INDEX_PER_KEY`] when the key record holds it (right before the component).
+    pub(crate) index: u8,
 }
 
 /// A validated compressed payload with precomputed decode tables.
@@ -89,8 +148,10 @@ struct ChannelDec {
     mask: [u32; 3],
     scale: [f32; 3],
     bias: [f32; 3],
-    /// True for a rotation (its 2-bit index sits right before its first component).
-    rotation: bool,
+    /// For a rotation: the bits of its index right before its first component (2, or 0 when the
+    /// segment shares one index, `fixed_index`).
+    index_bits: u32,
+    fixed_index: u32,
     /// The channel's bits (index and components, which are contiguous) fit one 8-byte load from
     /// any bit position (at most 57 bits).
     one_load: bool,
@@ -102,8 +163,13 @@ struct ChannelDec {
 pub(crate) struct LaneTable {
     scale: [Vec4; 3],
     bias: [Vec4; 3],
-    /// Per lane: bit offset inside a key record of the channel's first field (a rotation's index).
+    /// Per lane: bit offset inside a key record of the channel's first field (a rotation's index,
+    /// when the record holds it).
     at: [u32; 4],
+    /// Per lane: mask of the stored index (3, or 0 when the segment shares one) and the shared
+    /// index (0 when stored): a lane's index is `(word & index_mask) | index_fixed`.
+    index_mask: [u32; 4],
+    index_fixed: [u32; 4],
     /// Per component, per lane: its bit offset from `at`, and the mask of its bit width.
     shift: [[u32; 4]; 3],
     mask: [[u32; 4]; 3],
@@ -183,13 +249,19 @@ pub(crate) fn raw_from_smallest_three(index: u32, v: [f32; 3]) -> Quat {
 }
 
 /// Bit offsets of every component inside a key record, and the record size. `rotation_starts[c]` is
-/// true when component `c` is the first of a rotation (its 2-bit index comes right before it).
-pub fn record_layout(bits: &[u8], rotation_starts: &[bool]) -> (Vec<u32>, u32) {
+/// true when component `c` is the first of a rotation; its 2-bit index comes right before it unless
+/// `fixed` (that segment's [`QuantizedParts::rotation_index`] entries, one per rotation; empty:
+/// none fixed) gives it for the whole segment.
+pub fn record_layout(bits: &[u8], rotation_starts: &[bool], fixed: &[u8]) -> (Vec<u32>, u32) {
     let mut off = Vec::with_capacity(bits.len());
     let mut at = 0u32;
+    let mut r = 0;
     for (c, &b) in bits.iter().enumerate() {
         if rotation_starts.get(c).copied().unwrap_or(false) {
-            at += ROTATION_INDEX_BITS;
+            if fixed.get(r).is_none_or(|&i| i > 3) {
+                at += ROTATION_INDEX_BITS;
+            }
+            r += 1;
         }
         off.push(at);
         at += u32::from(b);
@@ -197,15 +269,35 @@ pub fn record_layout(bits: &[u8], rotation_starts: &[bool]) -> (Vec<u32>, u32) {
     (off, at)
 }
 
+/// Per segment, per rotation: the index every key of the segment shares, or [`INDEX_PER_KEY`]
+/// (what an encoder stores as [`QuantizedParts::rotation_index`]). `index[k * rotations + r]` as
+/// in [`pack`].
+pub fn shared_indices(keys: usize, segment_len: usize, rotations: usize, index: &[u8]) -> Vec<u8> {
+    let seg_len = segment_len.max(1);
+    let mut out = Vec::with_capacity(keys.div_ceil(seg_len) * rotations);
+    for first in (0..keys).step_by(seg_len) {
+        let last = (first + seg_len).min(keys);
+        for r in 0..rotations {
+            let at = |k: usize| index.get(k * rotations + r).copied().unwrap_or(0);
+            let i0 = at(first);
+            let same = (first..last).all(|k| at(k) == i0);
+            out.push(if same { i0 } else { INDEX_PER_KEY });
+        }
+    }
+    out
+}
+
 /// Packs quantized integers into the segment bitstreams [`QuantizedParts::data`] expects.
 ///
 /// `q[k * components + c]` is key `k`'s integer for component `c` (below `2^bits` of its segment);
 /// `index[k * rotations + r]` is key `k`'s largest-component index of rotation `r` (rotations in
-/// component order). `segments` and `rotation_starts` as in [`QuantizedParts`] and [`record_layout`].
+/// component order). `segments`, `rotation_index` and `rotation_starts` as in [`QuantizedParts`]
+/// and [`record_layout`].
 pub fn pack(
     keys: usize,
     segment_len: usize,
     segments: &[SegmentComponent],
+    rotation_index: &[u8],
     rotation_starts: &[bool],
     q: &[u32],
     index: &[u8],
@@ -218,7 +310,10 @@ pub fn pack(
         let n = seg_len.min(keys - first);
         let seg = &segments[s * comps..(s + 1) * comps];
         let bits: Vec<u8> = seg.iter().map(|x| x.bits).collect();
-        let (off, record) = record_layout(&bits, rotation_starts);
+        let fixed = rotation_index
+            .get(s * rotations..(s + 1) * rotations)
+            .unwrap_or_default();
+        let (off, record) = record_layout(&bits, rotation_starts, fixed);
         let mut buf = vec![0u8; (record as usize * n).div_ceil(8) + 8];
         let mut put = |bit: usize, v: u32, nbits: u32| {
             for i in 0..nbits as usize {
@@ -232,8 +327,10 @@ pub fn pack(
             let mut r = 0;
             for c in 0..comps {
                 if rotation_starts[c] {
-                    let idx = index[(first + k) * rotations + r];
-                    put(base + off[c] as usize - 2, u32::from(idx), 2);
+                    if fixed.get(r).is_none_or(|&i| i > 3) {
+                        let idx = index[(first + k) * rotations + r];
+                        put(base + off[c] as usize - 2, u32::from(idx), 2);
+                    }
                     r += 1;
                 }
                 put(
@@ -281,6 +378,37 @@ impl Quantized {
                 parts.segments.len()
             ));
         }
+        let rotations = rotation_starts.iter().filter(|&&r| r).count();
+        if !parts.rotation_index.is_empty()
+            && Some(parts.rotation_index.len()) != seg_count.checked_mul(rotations)
+        {
+            return bad(format!(
+                "{} rotation index entries for {seg_count} segments of {rotations} rotations",
+                parts.rotation_index.len()
+            ));
+        }
+        if let Some(i) = parts
+            .rotation_index
+            .iter()
+            .find(|&&i| i > 3 && i != INDEX_PER_KEY)
+        {
+            return bad(format!(
+                "rotation index entry {i} is neither 0-3 nor {INDEX_PER_KEY}"
+            ));
+        }
+        if !parts.rotation_index.is_empty() {
+            // A compact record stores rotation ranges in 16 bits.
+            for (first, _) in rotation_starts.iter().enumerate().filter(|s| *s.1) {
+                for c in first..first + 3 {
+                    let r = parts.ranges.get(c).copied().unwrap_or_default();
+                    if compact_range_units(r).is_none() {
+                        return bad(format!(
+                            "component {c}: rotation range {r:?} has no 16-bit form"
+                        ));
+                    }
+                }
+            }
+        }
         let mut seg = Vec::with_capacity(seg_count);
         let mut dec = Vec::with_capacity(parts.segments.len());
         let mut bit = 0usize;
@@ -293,8 +421,18 @@ impl Quantized {
             if let Some(b) = bits.iter().find(|&&b| b > MAX_BITS) {
                 return bad(format!("segment {s}: bit width {b} is above {MAX_BITS}"));
             }
-            let (off, record) = record_layout(&bits, rotation_starts);
+            let fixed = parts
+                .rotation_index
+                .get(s * rotations..(s + 1) * rotations)
+                .unwrap_or_default();
+            let (off, record) = record_layout(&bits, rotation_starts, fixed);
+            let mut r = 0;
             for (c, e) in entries.iter().enumerate() {
+                let mut index = INDEX_PER_KEY;
+                if rotation_starts.get(c).copied().unwrap_or(false) {
+                    index = fixed.get(r).copied().unwrap_or(INDEX_PER_KEY);
+                    r += 1;
+                }
                 let range = parts.ranges.get(c).copied().unwrap_or_default();
                 let (scale, bias) = dequant_params(range, *e);
                 let top = bias + scale * ((1u64 << e.bits) - 1) as f32;
@@ -306,6 +444,7 @@ impl Quantized {
                     mask: ((1u64 << e.bits) - 1) as u32,
                     scale,
                     bias,
+                    index,
                 });
             }
             let n = seg_len.min(keys - s * seg_len);
@@ -337,20 +476,20 @@ impl Quantized {
                 let g = i % (comps / 3).max(1);
                 let rotation = group_rot.get(g).copied().unwrap_or(false);
                 let bits = [0, 1, 2].map(|i| d[i].mask.count_ones() as u8);
-                let run = u32::from(bits[0])
-                    + u32::from(bits[1])
-                    + u32::from(bits[2])
-                    + if rotation { ROTATION_INDEX_BITS } else { 0 };
+                let stored = rotation && d[0].index > 3;
+                let index_bits = if stored { ROTATION_INDEX_BITS } else { 0 };
+                let run = u32::from(bits[0]) + u32::from(bits[1]) + u32::from(bits[2]) + index_bits;
                 ChannelDec {
                     off: [d[0].off, d[1].off, d[2].off],
                     mask: [d[0].mask, d[1].mask, d[2].mask],
                     scale: [d[0].scale, d[1].scale, d[2].scale],
                     bias: [d[0].bias, d[1].bias, d[2].bias],
-                    rotation,
+                    index_bits,
+                    fixed_index: if stored { 0 } else { u32::from(d[0].index & 3) },
                     one_load: run <= 57
                         && d[1].off == d[0].off + u32::from(bits[0])
                         && d[2].off == d[1].off + u32::from(bits[1])
-                        && (!rotation || d[0].off >= ROTATION_INDEX_BITS),
+                        && d[0].off >= index_bits,
                 }
             })
             .collect();
@@ -414,9 +553,11 @@ impl Quantized {
             else {
                 continue;
             };
-            // A rotation's fields start with its 2-bit index.
-            let first = ch.off[0] - if ch.rotation { ROTATION_INDEX_BITS } else { 0 };
+            // A rotation's fields start with its 2-bit index, when the record holds it.
+            let first = ch.off[0] - ch.index_bits;
             t.at[l] = first;
+            t.index_mask[l] = if ch.index_bits > 0 { 3 } else { 0 };
+            t.index_fixed[l] = ch.fixed_index;
             for c in 0..3 {
                 t.shift[c][l] = ch.off[c] - first;
                 t.mask[c][l] = ch.mask[c];
@@ -455,7 +596,7 @@ impl Quantized {
         if t.one_load {
             for l in 0..4 {
                 let word = read(base + t.at[l] as usize);
-                index[l] = (word & 3) as i32;
+                index[l] = ((word as u32 & t.index_mask[l]) | t.index_fixed[l]) as i32;
                 for (c, q) in q.iter_mut().enumerate() {
                     q[l] = ((word >> t.shift[c][l]) as u32 & t.mask[c][l]) as i32;
                 }
@@ -463,7 +604,7 @@ impl Quantized {
         } else {
             for l in 0..4 {
                 let at = base + t.at[l] as usize;
-                index[l] = (read(at) & 3) as i32;
+                index[l] = ((read(at) as u32 & t.index_mask[l]) | t.index_fixed[l]) as i32;
                 for (c, q) in q.iter_mut().enumerate() {
                     q[l] = (read(at + t.shift[c][l] as usize) as u32 & t.mask[c][l]) as i32;
                 }
@@ -532,7 +673,9 @@ impl Quantized {
                 Vec4::from(_mm_cvtepi32_ps(low))
             }};
         }
-        let index = field!(_mm256_setzero_si256(), _mm256_set1_epi64x(3));
+        let stored = field!(_mm256_setzero_si256(), v4!(&t.index_mask));
+        // Stored and shared indices are 0-3 (exact in f32), and a lane has one or the other.
+        let index = stored + Vec4::from_array(t.index_fixed.map(|i| i as f32));
         let q = [
             field!(v4!(&t.shift[0]), v4!(&t.mask[0])),
             field!(v4!(&t.shift[1]), v4!(&t.mask[1])),
@@ -625,7 +768,11 @@ impl KeyRef<'_> {
         let Some(d) = self.dec.get(c) else {
             return Quat::IDENTITY;
         };
-        let idx = (self.bits(self.base + d.off as usize - 2) & 3) as u32;
+        let idx = if d.index <= 3 {
+            u32::from(d.index)
+        } else {
+            (self.bits(self.base + (d.off as usize).saturating_sub(2)) & 3) as u32
+        };
         raw_from_smallest_three(idx, [self.value(c), self.value(c + 1), self.value(c + 2)])
     }
 }
@@ -678,13 +825,14 @@ mod tests {
             },
         ];
         let q = [7, 0, 2, 0, 31, 1];
-        let data = pack(3, 2, &segs, &starts, &q, &[]);
+        let data = pack(3, 2, &segs, &[], &starts, &q, &[]);
         // Segment 0: 2 keys x 3 bits = 1 byte; segment 1: 1 key x 6 bits = 1 byte.
         assert_eq!(data, vec![0b0001_0111, 0b0011_1111]);
         let parts = QuantizedParts {
             segment_len: 2,
             ranges: vec![[0.0, 7.0], [1.0, 2.0]],
             segments: segs,
+            rotation_index: Vec::new(),
             data,
         };
         let z = Quantized::new(parts, 3, &starts).unwrap();
@@ -693,6 +841,74 @@ mod tests {
         assert_eq!(z.key(1).value(1), 2.0); // zero bits: middle of the range
         assert_eq!(z.key(2).value(0), 7.0);
         assert_eq!(z.key(2).value(1), 3.0);
+    }
+
+    #[test]
+    fn compact_rotation_ranges_cover_their_values_in_16_bits() {
+        for (lo, hi) in [
+            (-0.866f32, 0.866f32),
+            (0.1, 0.1),
+            (-1.0, 0.999),
+            (0.123_456_7, 0.654_321),
+            (-0.000_01, 0.000_01),
+        ] {
+            let r = compact_rotation_range(lo, hi).unwrap();
+            // Covers, and is at most a step wider at each end.
+            assert!(r[0] <= lo && r[0] + r[1] >= hi, "{lo} {hi} {r:?}");
+            assert!(lo - r[0] < 1.0 / RANGE_UNITS, "{lo} {r:?}");
+            assert!(r[0] + r[1] - hi <= 2.0 / RANGE_UNITS, "{hi} {r:?}");
+            let u = compact_range_units(r).unwrap();
+            assert_eq!(range_from_units(u), r);
+        }
+        // Outside the span a 16-bit pair can say: no compact form.
+        assert_eq!(compact_rotation_range(-1.5, 0.0), None);
+        assert_eq!(compact_rotation_range(-1.0, 1.0), None);
+        assert_eq!(compact_rotation_range(f32::NAN, 0.0), None);
+        assert_eq!(compact_range_units([0.1, 0.5]), None);
+    }
+
+    #[test]
+    fn a_shared_index_takes_no_bits_in_the_key_records() {
+        // One rotation (three components of 4 bits), 2 keys in one segment, both dropping z.
+        let starts = [true, false, false];
+        let seg = |bits| SegmentComponent {
+            bits,
+            min: 0,
+            extent: 255,
+        };
+        let segs = vec![seg(4), seg(4), seg(4)];
+        let q = [1, 2, 3, 4, 5, 6];
+        let index = [2u8, 2];
+        assert_eq!(shared_indices(2, 2, 1, &index), vec![2]);
+        assert_eq!(shared_indices(2, 2, 1, &[2, 3]), vec![INDEX_PER_KEY]);
+        let per_key = pack(2, 2, &segs, &[], &starts, &q, &index);
+        let shared = pack(2, 2, &segs, &[2], &starts, &q, &index);
+        // 14 bits per key against 12.
+        assert_eq!((per_key.len(), shared.len()), (4, 3));
+        // Key 0: x = 1, y = 2, z = 3 in the low bits, least significant first.
+        assert_eq!(shared[0], 0x21);
+        let parts = |data, rotation_index| QuantizedParts {
+            segment_len: 2,
+            ranges: vec![[-1.0, 1.875]; 3],
+            segments: segs.clone(),
+            rotation_index,
+            data,
+        };
+        let a = Quantized::new(parts(shared, vec![2]), 2, &starts).unwrap();
+        let b = Quantized::new(parts(per_key, vec![]), 2, &starts).unwrap();
+        for k in 0..2 {
+            let (qa, qb) = (a.key(k).quat_raw(0), b.key(k).quat_raw(0));
+            assert_eq!(
+                qa.to_array().map(f32::to_bits),
+                qb.to_array().map(f32::to_bits)
+            );
+        }
+        // Index 2: the rebuilt component is z, the stored ones x, y, w.
+        let x = -1.0 + 1.875 / 15.0;
+        assert_eq!(a.key(0).quat_raw(0).x, x);
+        // Entries other than 0-3 and 255 are refused, and so is a table of the wrong length.
+        assert!(Quantized::new(parts(vec![0; 3], vec![4]), 2, &starts).is_err());
+        assert!(Quantized::new(parts(vec![0; 3], vec![2, 2]), 2, &starts).is_err());
     }
 
     #[test]
@@ -706,6 +922,7 @@ mod tests {
                 min: 0,
                 extent: 255,
             }],
+            rotation_index: Vec::new(),
             data: vec![0; 4],
         };
         assert!(Quantized::new(ok.clone(), 4, &starts).is_ok());

@@ -94,10 +94,24 @@ fn clip_record_offset(bytes: &[u8]) -> usize {
     s.iter().find(|s| s.tag == Tag::CLIPS).unwrap().offset as usize + 16
 }
 
-/// Offset of the segment entries inside the clip record, from the documented layout.
-fn segments_offset(c: &Clip) -> usize {
-    let pad = |n: usize| n.div_ceil(16) * 16;
-    let parts = c.quantized_parts().unwrap();
+fn pad(n: usize) -> usize {
+    n.div_ceil(16) * 16
+}
+
+/// Per component: whether it belongs to a rotation (16-bit range in a compact record).
+fn rotation_components(c: &Clip) -> Vec<bool> {
+    let n = c.quantized_parts().unwrap().ranges.len();
+    let mut out = vec![false; n];
+    for t in c.tracks() {
+        if let sinew_core::Channel::Animated(o) = t.rotation {
+            out[o as usize..o as usize + 3].fill(true);
+        }
+    }
+    out
+}
+
+/// Offset of the component ranges inside the clip record, from the documented layout.
+fn ranges_offset(c: &Clip) -> usize {
     let constants: usize = c
         .tracks()
         .iter()
@@ -114,25 +128,80 @@ fn segments_offset(c: &Clip) -> usize {
         .sum();
     let mut at = pad(32 + 4 * c.times().len());
     at = pad(at + 8 * c.tracks().len());
-    at = pad(at + 4 * constants);
-    pad(at + 8 * parts.ranges.len())
+    pad(at + 4 * constants)
+}
+
+/// Offset of the segment entries inside the (compact) clip record, from the documented layout:
+/// 4 bytes per rotation component's range, 8 per other component's.
+fn segments_offset(c: &Clip) -> usize {
+    let ranges: usize = rotation_components(c)
+        .iter()
+        .map(|&r| if r { 4 } else { 8 })
+        .sum();
+    pad(ranges_offset(c) + ranges)
+}
+
+/// Offset of the per-segment rotation index table (compact records).
+fn rotation_index_offset(c: &Clip) -> usize {
+    pad(segments_offset(c) + 3 * c.quantized_parts().unwrap().segments.len())
 }
 
 #[test]
-fn compressed_clip_round_trips_and_header_says_1_2() {
+fn compressed_clip_round_trips_and_header_says_1_4() {
     let (bytes, c) = compressed_file();
-    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 2);
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 4);
     let back = format::read(&bytes).unwrap();
     assert_eq!(back.clips[0], c);
     let rec = clip_record_offset(&bytes);
-    // Flags: bit 2 (compressed) set.
+    // Flags: bit 2 (compressed) and bit 3 (compact) set.
     assert_eq!(
         u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap()),
-        4
+        12
     );
     // The segment entries sit where docs/format.md says: the first one's bit width is its first byte.
     let parts = c.quantized_parts().unwrap();
     assert_eq!(bytes[rec + segments_offset(&c)], parts.segments[0].bits);
+    // Then the rotation index table: one byte per segment and rotation, each 0-3 or 255.
+    let rotations = rotation_components(&c).iter().filter(|&&r| r).count() / 3;
+    assert_eq!(rotations, 2);
+    let at = rec + rotation_index_offset(&c);
+    let table = &bytes[at..at + parts.rotation_index.len()];
+    assert_eq!(table, &parts.rotation_index[..]);
+    assert_eq!(
+        table.len(),
+        rotations * parts.segments.len() / parts.ranges.len()
+    );
+    assert!(table.iter().all(|&i| i <= 3 || i == 255), "{table:?}");
+    // A rotation range is two u16: (min + 1) and extent in units of 2^-15.
+    let first_rot = rotation_components(&c).iter().position(|&r| r).unwrap();
+    let ro = rec + ranges_offset(&c) + 8 * first_rot;
+    let u = |i: usize| f32::from(u16::from_le_bytes([bytes[ro + i], bytes[ro + i + 1]]));
+    assert_eq!(u(0) / 32768.0 - 1.0, parts.ranges[first_rot][0]);
+    assert_eq!(u(2) / 32768.0, parts.ranges[first_rot][1]);
+}
+
+#[test]
+fn reader_rejects_a_bad_rotation_index_entry_and_a_compact_flag_alone() {
+    let (bytes, c) = compressed_file();
+    let rec = clip_record_offset(&bytes);
+    let mut b = bytes.clone();
+    b[rec + rotation_index_offset(&c)] = 7;
+    fix_crcs(&mut b);
+    let e = format::read(&b).unwrap_err();
+    assert_eq!(e.section, "CLIP");
+    assert!(
+        matches!(
+            e.kind,
+            FormatErrorKind::Invalid(_) | FormatErrorKind::CountTooLarge { .. }
+        ),
+        "{e}"
+    );
+    // Bit 3 without bit 2 is not a layout.
+    let mut b = bytes;
+    b[rec + 4..rec + 8].copy_from_slice(&8u32.to_le_bytes());
+    fix_crcs(&mut b);
+    let e = format::read(&b).unwrap_err();
+    assert!(e.to_string().contains("clip flags"), "{e}");
 }
 
 #[test]
@@ -156,8 +225,9 @@ fn reader_rejects_bit_widths_above_24() {
 #[test]
 fn reader_rejects_non_finite_ranges() {
     let (mut bytes, c) = compressed_file();
-    let at = clip_record_offset(&bytes) + segments_offset(&c)
-        - 16 * c.quantized_parts().unwrap().ranges.len().div_ceil(2);
+    // The first component is the root's translation: an f32 range even in a compact record.
+    assert!(!rotation_components(&c)[0]);
+    let at = clip_record_offset(&bytes) + ranges_offset(&c);
     bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     fix_crcs(&mut bytes);
     let e = format::read(&bytes).unwrap_err();

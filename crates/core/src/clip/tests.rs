@@ -337,6 +337,18 @@ fn compressed_tracks() -> Vec<Track> {
 /// A compressed clip built by hand over `tracks`: 5 keys in segments of 2, bit widths cycling
 /// through `bits`, pseudo-random quantized values and rotation indices.
 fn compressed_with(tracks: Vec<Track>, looping: bool, additive: bool, bits: &[u8]) -> Clip {
+    compressed_layout(tracks, looping, additive, bits, true)
+}
+
+/// [`compressed_with`]; with `shared` false every key stores every rotation index (the layout of
+/// files before 1.4) instead of storing a segment's shared index once.
+fn compressed_layout(
+    tracks: Vec<Track>,
+    looping: bool,
+    additive: bool,
+    bits: &[u8],
+    shared: bool,
+) -> Clip {
     let starts = rotation_starts(&tracks).unwrap();
     let keys = 5;
     let comps = starts.len();
@@ -359,12 +371,28 @@ fn compressed_with(tracks: Vec<Track>, looping: bool, additive: bool, bits: &[u8
             q.push(if bits == 0 { 0 } else { x % (1 << bits) });
         }
     }
+    // Even rotations keep one index through each segment (stored once per segment), odd ones
+    // change it from key to key (stored in every key).
     let index: Vec<u8> = (0..keys * rotations)
-        .map(|i| [0u8, 3, 1, 2, 3][i % 5])
+        .map(|i| {
+            let (k, r) = (i / rotations.max(1), i % rotations.max(1));
+            if r % 2 == 0 {
+                ((k / 2 + r + 1) % 4) as u8
+            } else {
+                [0u8, 3, 1, 2, 3][i % 5]
+            }
+        })
         .collect();
-    let data = crate::compressed::pack(keys, 2, &segs, &starts, &q, &index);
+    let shared = if shared {
+        crate::compressed::shared_indices(keys, 2, rotations, &index)
+    } else {
+        Vec::new()
+    };
+    let data = crate::compressed::pack(keys, 2, &segs, &shared, &starts, &q, &index);
     let mut ranges = vec![[-0.5f32, 1.0]; comps];
-    ranges[0] = [-3.0, 7.5];
+    if !starts.first().copied().unwrap_or(true) {
+        ranges[0] = [-3.0, 7.5];
+    }
     Clip::from_quantized(
         "c".into(),
         if looping { 1.25 } else { 1.0 },
@@ -377,6 +405,7 @@ fn compressed_with(tracks: Vec<Track>, looping: bool, additive: bool, bits: &[u8
             segment_len: 2,
             ranges,
             segments: segs,
+            rotation_index: shared,
             data,
         },
     )
@@ -589,4 +618,70 @@ fn key_cache_decodes_only_when_the_cursor_passes_a_key() {
     let half = b.restricted(|j| j == 0);
     s.sample(&c, &half, &sk, 0.3, &mut out).unwrap();
     assert_eq!(s.cache.owner, Some((c.id.0, half.id.0)));
+}
+
+#[test]
+fn a_segment_shared_rotation_index_decodes_as_the_same_index_stored_per_key() {
+    // Same integers and indices, two layouts: every key decodes to the same bits, and the shared
+    // layout is two bits per key shorter for each rotation that keeps its index in a segment.
+    let tracks = || {
+        (0..5)
+            .map(|i| Track {
+                joint: format!("j{i}"),
+                translation: Channel::Bind,
+                rotation: Channel::Animated(3 * i),
+                scale: Channel::Bind,
+            })
+            .collect::<Vec<_>>()
+    };
+    let bits = [0, 5, 9, 16];
+    let shared = compressed_layout(tracks(), true, false, &bits, true);
+    let per_key = compressed_layout(tracks(), true, false, &bits, false);
+    let (a, b) = (shared.to_plain(), per_key.to_plain());
+    assert_eq!(a.times(), b.times());
+    for t in [0.0, 0.1, 0.25, 0.6, 0.99] {
+        let sk = Skeleton::from_unordered(
+            (0..5)
+                .map(|i| crate::JointDesc {
+                    name: format!("j{i}"),
+                    parent: None,
+                    bind_local: Transform::IDENTITY,
+                    inverse_bind: None,
+                })
+                .collect(),
+        )
+        .unwrap()
+        .0;
+        let pose = |c: &Clip| {
+            let binding = ClipBinding::new(c, &sk);
+            let mut out = vec![Transform::IDENTITY; sk.len()];
+            Sampler::new()
+                .sample(c, &binding, &sk, t, &mut out)
+                .unwrap();
+            out.iter()
+                .map(|x| x.rotation.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(pose(&shared), pose(&per_key), "t = {t}");
+    }
+    let (ps, pk) = (
+        shared.quantized_parts().unwrap(),
+        per_key.quantized_parts().unwrap(),
+    );
+    // 5 keys in segments of 2: 3 segments; rotations 0, 2, 4 share their index in every segment.
+    assert_eq!(
+        ps.rotation_index
+            .iter()
+            .enumerate()
+            .filter(|(i, &x)| i % 5 % 2 == 0 && x <= 3)
+            .count(),
+        9
+    );
+    assert!(pk.rotation_index.is_empty());
+    assert!(
+        ps.data.len() < pk.data.len(),
+        "{} {}",
+        ps.data.len(),
+        pk.data.len()
+    );
 }

@@ -19,6 +19,9 @@ pub const VERSION_MINOR: u16 = 1;
 pub const VERSION_MINOR_COMPRESSED: u16 = 2;
 /// Minor version of files that hold game data (`GAME`, added in 1.3; older readers skip it).
 pub const VERSION_MINOR_GAME: u16 = 3;
+/// Minor version of files that hold compact compressed clips (clip flag bit 3, added in 1.4:
+/// rotation indices shared per segment, 16-bit rotation ranges), which older readers reject.
+pub const VERSION_MINOR_COMPACT: u16 = 4;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).

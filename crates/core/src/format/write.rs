@@ -2,15 +2,17 @@
 
 use super::asset::{
     validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
-    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPRESSED,
-    VERSION_MINOR_GAME,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPACT,
+    VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME,
 };
 use super::error::FormatError;
 use crate::clip::Channel;
+use crate::compressed::compact_range_units;
 use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
-/// Encodes an asset as a `.sinew` file, version 1.1 (1.2 with compressed clips, 1.3 with game data).
+/// Encodes an asset as a `.sinew` file, version 1.1 (1.2 with compressed clips, 1.3 with game data,
+/// 1.4 with compact compressed clips).
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -41,7 +43,13 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
         sections.push((Tag::GAME, game(&asset.game, &mut strings)));
     }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
-    let minor = if !asset.game.is_empty() {
+    let compact = asset.clips.iter().any(|c| {
+        c.quantized_parts()
+            .is_some_and(|p| !p.rotation_index.is_empty())
+    });
+    let minor = if compact {
+        VERSION_MINOR_COMPACT
+    } else if !asset.game.is_empty() {
         VERSION_MINOR_GAME
     } else if asset.clips.iter().any(Clip::is_compressed) {
         VERSION_MINOR_COMPRESSED
@@ -337,6 +345,9 @@ fn vec_channel(b: &mut Buf, c: Channel<glam::Vec3>) {
 
 /// Clip flag: quantized (compressed) record layout.
 pub(crate) const CLIP_QUANTIZED: u32 = 4;
+/// Clip flag (with [`CLIP_QUANTIZED`], since 1.4): compact record, with 16-bit rotation ranges and a
+/// table of per-segment rotation indices.
+pub(crate) const CLIP_COMPACT: u32 = 8;
 /// Compressed track table kind: quantized animated channel.
 pub(crate) const KIND_QUANTIZED: u8 = 3;
 
@@ -358,6 +369,11 @@ fn compressed_record(
 ) {
     let start = b.0.len();
     let mut flags = CLIP_QUANTIZED;
+    // `Clip::from_quantized` checked that the rotation ranges of such parts have 16-bit forms.
+    let compact = !parts.rotation_index.is_empty();
+    if compact {
+        flags |= CLIP_COMPACT;
+    }
     if c.looping() {
         flags |= CLIP_LOOPING;
     }
@@ -420,15 +436,38 @@ fn compressed_record(
     align_from(b, start);
     b.f32s(&constants);
     align_from(b, start);
-    for r in &parts.ranges {
-        b.f32s(r);
+    let rotation_comps = rotation_components(c);
+    for (i, r) in parts.ranges.iter().enumerate() {
+        match compact_range_units(*r).filter(|_| compact && rotation_comps.contains(&i)) {
+            Some([min, ext]) => {
+                b.u16(min);
+                b.u16(ext);
+            }
+            None => b.f32s(r),
+        }
     }
     align_from(b, start);
     for s in &parts.segments {
         b.bytes(&[s.bits, s.min, s.extent]);
     }
     align_from(b, start);
+    if compact {
+        b.bytes(&parts.rotation_index);
+        align_from(b, start);
+    }
     b.bytes(&parts.data);
+}
+
+/// The component numbers of a compressed clip's rotations (three per animated rotation).
+fn rotation_components(c: &Clip) -> std::collections::BTreeSet<usize> {
+    c.tracks()
+        .iter()
+        .filter_map(|t| match t.rotation {
+            Channel::Animated(o) => Some(o as usize..o as usize + 3),
+            _ => None,
+        })
+        .flatten()
+        .collect()
 }
 
 /// Pads relative to `start` (clip records start aligned inside the section).

@@ -3,7 +3,8 @@
 use super::metric::Rig;
 use super::reduce::{WChan, Work};
 use sinew_core::compressed::{
-    dequant_params, pack, smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
+    compact_range_units, compact_rotation_range, dequant_params, pack, shared_indices,
+    smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
 };
 use sinew_core::glam::Quat;
 use sinew_core::Clip;
@@ -197,6 +198,10 @@ impl Layout {
                 let hi = c.vals.iter().copied().fold(f32::MIN, f32::max);
                 if n == 0 {
                     [0.0, 0.0]
+                } else if c.kind == Kind::R {
+                    // The 16-bit range a compact record stores (it covers the values; a step of
+                    // 2^-15 wider at most).
+                    compact_rotation_range(lo, hi).unwrap_or([lo, (hi - lo).max(0.0)])
                 } else {
                     [lo, (hi - lo).max(0.0)]
                 }
@@ -292,7 +297,27 @@ impl Layout {
                 idx[k * rotations + r] = i;
             }
         }
-        let data = pack(n, self.seg_len, &segments, &self.starts, &q, &idx);
+        // Rotation indices shared by a whole segment are stored once (a compact record), when every
+        // rotation range has its 16-bit form.
+        let compact = self
+            .comps
+            .iter()
+            .zip(&self.ranges)
+            .all(|(c, r)| c.kind != Kind::R || compact_range_units(*r).is_some());
+        let rotation_index = if compact && rotations > 0 {
+            shared_indices(n, self.seg_len, rotations, &idx)
+        } else {
+            Vec::new()
+        };
+        let data = pack(
+            n,
+            self.seg_len,
+            &segments,
+            &rotation_index,
+            &self.starts,
+            &q,
+            &idx,
+        );
         let (tracks, _) = work.clip_tracks(3);
         Clip::from_quantized(
             like.name().to_owned(),
@@ -306,6 +331,7 @@ impl Layout {
                 segment_len: self.seg_len as u32,
                 ranges: self.ranges.clone(),
                 segments,
+                rotation_index,
                 data,
             },
         )

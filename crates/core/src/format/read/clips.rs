@@ -4,8 +4,8 @@ use super::cursor::{f32s_of, Cur, Result, Strs};
 use crate::clip::{Channel, Track};
 use crate::format::error::FormatErrorKind as K;
 use crate::format::write::{
-    CLIP_ADDITIVE, CLIP_LOOPING, CLIP_QUANTIZED, ENCODING_F32, KIND_ANIMATED, KIND_BIND,
-    KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
+    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_QUANTIZED, ENCODING_F32, KIND_ANIMATED,
+    KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
 };
 use crate::Clip;
 use glam::{Quat, Vec3};
@@ -80,7 +80,9 @@ pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
     let start = c.pos;
     let name = strs.read(c, "clip name string")?;
     let flags = c.u32()?;
-    if flags & !(CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED) != 0 {
+    let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | CLIP_COMPACT;
+    // The compact layout is a variant of the compressed one.
+    if flags & !known != 0 || (flags & CLIP_COMPACT != 0 && flags & CLIP_QUANTIZED == 0) {
         return Err(c.err_at(
             start + 4,
             K::BadValue {
@@ -156,7 +158,7 @@ pub(super) fn compressed_clip(
     duration: f32,
     sample_rate: f32,
 ) -> Result<Clip> {
-    use crate::compressed::{QuantizedParts, SegmentComponent};
+    use crate::compressed::{range_from_units, QuantizedParts, SegmentComponent};
     let key_count = c.u32()?;
     let comp_at = c.pos;
     let components = c.u32()?;
@@ -276,8 +278,49 @@ pub(super) fn compressed_clip(
             },
         ));
     }
-    let range_floats = c.f32s(u64::from(components) * 2, "component ranges")?;
-    let ranges = range_floats.chunks_exact(2).map(|r| [r[0], r[1]]).collect();
+    let compact = flags & CLIP_COMPACT != 0;
+    let rotation_comps: Vec<bool> = {
+        let mut v = vec![false; next as usize];
+        for &r in &rotations {
+            for i in r..r + 3 {
+                if let Some(x) = v.get_mut(i as usize) {
+                    *x = true;
+                }
+            }
+        }
+        v
+    };
+    let ranges: Vec<[f32; 2]> = if compact {
+        // 16-bit pairs for rotation components, f32 pairs for the others.
+        let rot = rotation_comps.iter().filter(|&&r| r).count() as u64;
+        let bytes = (u64::from(components) - rot) * 8 + rot * 4;
+        let raw = c.elements(bytes, 1, "component ranges")?;
+        let mut out = Vec::with_capacity(rotation_comps.len());
+        let mut at = 0usize;
+        for &is_rot in &rotation_comps {
+            let n = if is_rot { 4 } else { 8 };
+            let mut b = [0u8; 8];
+            if let Some(src) = raw.get(at..at + n) {
+                b[..n].copy_from_slice(src);
+            }
+            at += n;
+            out.push(if is_rot {
+                range_from_units([
+                    u16::from_le_bytes([b[0], b[1]]),
+                    u16::from_le_bytes([b[2], b[3]]),
+                ])
+            } else {
+                [
+                    f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                    f32::from_le_bytes([b[4], b[5], b[6], b[7]]),
+                ]
+            });
+        }
+        out
+    } else {
+        let range_floats = c.f32s(u64::from(components) * 2, "component ranges")?;
+        range_floats.chunks_exact(2).map(|r| [r[0], r[1]]).collect()
+    };
     c.align()?;
     let seg_count = u64::from(key_count).div_ceil(u64::from(segment_len));
     let seg_bytes = c.elements(
@@ -294,12 +337,36 @@ pub(super) fn compressed_clip(
         })
         .collect();
     c.align()?;
-    // The data's exact length follows from the bit widths: per segment, ceil(record bits * keys / 8).
+    let rotation_index = if compact {
+        let v = c
+            .elements(
+                seg_count.saturating_mul(rotations.len() as u64),
+                1,
+                "rotation index entries",
+            )?
+            .to_vec();
+        c.align()?;
+        v
+    } else {
+        Vec::new()
+    };
+    // The data's exact length follows from the bit widths: per segment, ceil(record bits * keys / 8)
+    // (a shared rotation index takes no bits in the records).
     let comps = components as usize;
     let mut needed = 0u64;
     for (s, seg) in seg_bytes.chunks(comps.max(1) * 3).enumerate() {
+        let stored = if compact {
+            rotation_index
+                .iter()
+                .skip(s * rotations.len())
+                .take(rotations.len())
+                .filter(|&&i| i > 3)
+                .count()
+        } else {
+            rotations.len()
+        };
         let bits: u64 =
-            seg.chunks_exact(3).map(|b| u64::from(b[0])).sum::<u64>() + 2 * rotations.len() as u64;
+            seg.chunks_exact(3).map(|b| u64::from(b[0])).sum::<u64>() + 2 * stored as u64;
         let first = s as u64 * u64::from(segment_len);
         let keys = u64::from(segment_len).min(u64::from(key_count).saturating_sub(first));
         needed = needed.saturating_add((bits * keys).div_ceil(8));
@@ -309,6 +376,7 @@ pub(super) fn compressed_clip(
         segment_len,
         ranges,
         segments,
+        rotation_index,
         data,
     };
     Clip::from_quantized(

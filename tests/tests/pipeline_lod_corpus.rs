@@ -207,6 +207,12 @@ fn check(relative: &str, expect_skinned: bool) -> Option<Vec<f32>> {
                 h < HAUSDORFF_BOUND * diag,
                 "{what}: Hausdorff {h}, diagonal {diag}"
             );
+            // The reported error bounds the measured distance (issue 18).
+            assert!(
+                g.error_model >= h,
+                "{what}: reports {} model units, measured {h}",
+                g.error_model
+            );
             if let (Some(pal), true) = (&palette, base.is_skinned()) {
                 let pb = skin(base, pal);
                 let pl = skin(lod, pal);

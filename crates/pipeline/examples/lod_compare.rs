@@ -254,6 +254,11 @@ fn main() {
         let variants: Vec<(&str, LodTuning, f32)> = vec![
             ("default", d, DEFAULT_MAX_ERROR),
             (
+                "no-part-locks",
+                with(&|t| t.lock_part_extremes = false),
+                DEFAULT_MAX_ERROR,
+            ),
+            (
                 "not-permissive",
                 with(&|t| t.permissive = false),
                 DEFAULT_MAX_ERROR,

@@ -9,11 +9,13 @@ pub mod compress;
 pub mod cut;
 pub mod export;
 pub mod lod;
+mod lod_parts;
 pub mod mapping;
 pub mod pose;
 pub mod preview;
 pub mod retarget;
 pub mod split;
+pub mod surface;
 pub mod texture;
 pub mod verify;
 

@@ -207,99 +207,22 @@ pub fn measured_error(base: &Lod, lod: &Lod) -> f32 {
     one_sided(base, lod).max(one_sided(lod, base))
 }
 
-/// Largest distance from a vertex of `from` to the surface of `to` (model units), checking at most
-/// about 4 million vertex-triangle pairs (vertices taken at an even stride beyond that).
+/// Largest distance from a vertex of `from` to the surface of `to` (model units).
 pub fn one_sided(from: &Lod, to: &Lod) -> f32 {
-    let (base, lod) = (to, from);
-    let tris: Vec<[Vec3; 3]> = base
-        .indices
-        .chunks_exact(3)
-        .filter_map(|t| {
-            Some([
-                *base.positions.get(t[0] as usize)?,
-                *base.positions.get(t[1] as usize)?,
-                *base.positions.get(t[2] as usize)?,
-            ])
-        })
-        .collect();
-    if tris.is_empty() || lod.positions.is_empty() {
+    if to.indices.is_empty() || from.positions.is_empty() {
         return 0.0;
     }
-    let budget = 4_000_000usize;
-    let stride = (lod.positions.len() * tris.len()).div_ceil(budget).max(1);
-    lod.positions
+    let grid = crate::surface::TriangleGrid::new(&to.positions, &to.indices);
+    from.positions
         .iter()
-        .step_by(stride)
-        .map(|&p| {
-            tris.iter()
-                .map(|t| point_triangle_distance(p, t[0], t[1], t[2]))
-                .fold(f32::INFINITY, f32::min)
-        })
+        .map(|&p| grid.distance(p))
+        .filter(|d| d.is_finite())
         .fold(0.0, f32::max)
-}
-
-/// Distance from `p` to triangle `abc` (closest point by Voronoi regions, after Ericson).
-pub fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return ap.length();
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return bp.length();
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        let v = d1 / (d1 - d3);
-        return (p - (a + ab * v)).length();
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return cp.length();
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        let w = d2 / (d2 - d6);
-        return (p - (a + ac * w)).length();
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
-        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (p - (b + (c - b) * w)).length();
-    }
-    let denom = va + vb + vc;
-    if denom == 0.0 || !denom.is_finite() {
-        return ap.length().min(bp.length()).min(cp.length());
-    }
-    let (v, w) = (vb / denom, vc / denom);
-    (p - (a + ab * v + ac * w)).length()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn point_triangle_distance_by_region() {
-        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
-        assert_eq!(
-            point_triangle_distance(Vec3::new(0.25, 0.25, 2.0), a, b, c),
-            2.0
-        );
-        assert_eq!(
-            point_triangle_distance(Vec3::new(-3.0, 0.0, 4.0), a, b, c),
-            5.0
-        );
-        let d = point_triangle_distance(Vec3::new(1.0, 1.0, 0.0), a, b, c);
-        assert!((d - 0.5f32.sqrt()).abs() < 1e-6, "{d}");
-        assert_eq!(
-            point_triangle_distance(Vec3::new(0.5, -2.0, 0.0), a, b, c),
-            2.0
-        );
-    }
 
     #[test]
     fn a_lod_on_the_surface_has_no_error_and_a_moved_one_does() {

@@ -146,6 +146,9 @@ pub struct BlendBuffers {
     driven: Vec<u8>,
     /// Per block, the lanes of joints that exist (all four but in a last, partial block).
     every: Vec<u8>,
+    /// The sums are to be read as zero ([`BlendBuffers::reset`] only sets this; the next layer
+    /// writes every block instead of adding to it, which saves a pass over the buffer).
+    fresh: bool,
 }
 
 impl BlendBuffers {
@@ -159,6 +162,7 @@ impl BlendBuffers {
             every: (0..blocks)
                 .map(|b| 0b1111u8 >> (4 * b + 4).saturating_sub(joints).min(4))
                 .collect(),
+            fresh: false,
         }
     }
 
@@ -169,7 +173,15 @@ impl BlendBuffers {
 
     /// Clears the accumulated weights; call before the first layer of a frame.
     pub fn reset(&mut self) {
-        self.accum.fill(Vec4::ZERO);
+        self.fresh = true;
+    }
+
+    /// Writes the zeros a [`BlendBuffers::reset`] stands for.
+    fn materialize(&mut self) {
+        if self.fresh {
+            self.accum.fill(Vec4::ZERO);
+            self.fresh = false;
+        }
     }
 
     /// Total normal-layer weight accumulated so far on each joint.
@@ -178,7 +190,7 @@ impl BlendBuffers {
             return None;
         }
         let w = self.accum.get((joint / 4) * soa::ACCUM + soa::W)?;
-        Some(w[joint % 4])
+        Some(if self.fresh { 0.0 } else { w[joint % 4] })
     }
 
     /// Adds a normal (non-additive) layer. See the module docs for the arithmetic.
@@ -195,7 +207,8 @@ impl BlendBuffers {
                 .fold(0, |d, (i, &j)| d | (j ^ i as JointIndex))
                 == 0;
         if every_joint {
-            accumulate_blocks(&mut self.accum, &self.every, layer);
+            accumulate_blocks(&mut self.accum, &self.every, layer, self.fresh);
+            self.fresh = false;
             return Ok(());
         }
         // The lanes of each block the layer drives. A joint index outside the skeleton, or one
@@ -230,9 +243,11 @@ impl BlendBuffers {
             *d = lanes;
         }
         if by_blocks {
-            accumulate_blocks(&mut self.accum, &self.driven, layer);
+            accumulate_blocks(&mut self.accum, &self.driven, layer, self.fresh);
+            self.fresh = false;
             Ok(())
         } else {
+            self.materialize();
             accumulate_joints(&mut self.accum, n, layer)
         }
     }
@@ -255,7 +270,12 @@ impl BlendBuffers {
                 got: out.len(),
             });
         }
-        resolve_blocks(&self.accum, bind, out);
+        if self.fresh {
+            // Nothing accumulated since the reset: every joint is the bind pose.
+            out.copy_from_slice(bind);
+        } else {
+            resolve_blocks(&self.accum, bind, out);
+        }
         Ok(())
     }
 
@@ -282,17 +302,35 @@ impl BlendBuffers {
 
 multiversion! {
     /// Adds `layer` to `accum` a block at a time; `driven` holds the lanes it drives per block (each
-    /// joint once, all inside the skeleton).
-    fn accumulate_blocks(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>) -> ()
+    /// joint once, all inside the skeleton). `fresh`: `accum` is to be read as zeros (every block
+    /// is written).
+    fn accumulate_blocks(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) -> ()
         => accumulate_blocks_generic;
 }
 
 #[inline(always)]
-fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>) {
+fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) {
+    if fresh {
+        add_blocks::<true>(accum, driven, layer);
+    } else {
+        add_blocks::<false>(accum, driven, layer);
+    }
+}
+
+/// [`accumulate_blocks`] with `FRESH` = `fresh`. Adding to a zero read from memory and adding to a
+/// zero in a register are the same operation: a fresh buffer gives the bits a cleared one gives.
+#[inline(always)]
+fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>) {
     let weight = Vec4::splat(layer.weight);
     let blocks = accum.chunks_exact_mut(soa::ACCUM).zip(driven);
     for (b, (a, &d)) in blocks.enumerate() {
+        let Ok(a) = <&mut [Vec4; soa::ACCUM]>::try_from(a) else {
+            continue;
+        };
         if d == 0 {
+            if FRESH {
+                *a = [Vec4::ZERO; soa::ACCUM];
+            }
             continue;
         }
         let first = 4 * b;
@@ -313,11 +351,12 @@ fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_
         // joint the layer leaves out is never read.
         let on = soa::lanes(d) & w.cmpgt(Vec4::ZERO);
         if !on.any() {
+            if FRESH {
+                *a = [Vec4::ZERO; soa::ACCUM];
+            }
             continue;
         }
-        let Ok(a) = <&mut [Vec4; soa::ACCUM]>::try_from(a) else {
-            continue;
-        };
+        let mut sums = if FRESH { [Vec4::ZERO; soa::ACCUM] } else { *a };
         let w = soa::select(on, w, Vec4::ZERO);
         let block = match layer.pose.get(first..first + 4) {
             Some(four) => soa::block_of(four),
@@ -329,17 +368,19 @@ fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_
         } else {
             block.map(|v| soa::select(on, v, Vec4::ZERO))
         };
-        let acc_r = [a[soa::R], a[soa::R + 1], a[soa::R + 2], a[soa::R + 3]];
+        let s = &mut sums;
+        let acc_r = [s[soa::R], s[soa::R + 1], s[soa::R + 2], s[soa::R + 3]];
         let q =
             soa::negate_where_negative(soa::rotation(&p), soa::dot_q(&acc_r, &soa::rotation(&p)));
         for c in 0..3 {
-            a[soa::T + c] += p[soa::T + c] * w;
-            a[soa::S + c] += p[soa::S + c] * w;
+            s[soa::T + c] += p[soa::T + c] * w;
+            s[soa::S + c] += p[soa::S + c] * w;
         }
         for (c, v) in q.into_iter().enumerate() {
-            a[soa::R + c] += v * w;
+            s[soa::R + c] += v * w;
         }
-        a[soa::W] += w;
+        s[soa::W] += w;
+        *a = sums;
     }
 }
 

@@ -619,17 +619,33 @@ mod tests {
                     Layer::new(&p3, &some).with_mask(&m2).with_weight(weight),
                     Layer::new(&p2, &twice).with_mask(&m2).with_weight(0.3),
                 ];
-                for k in 0..=layers.len() {
+                // Every prefix, and every suffix in reverse order (each kind of layer comes first
+                // after a reset at some point: whole-body, partial, and the per-joint way).
+                let mut reversed = layers.to_vec();
+                reversed.reverse();
+                for (k, order) in
+                    (0..=layers.len()).flat_map(|k| [(k, &layers[..]), (k, &reversed[..])])
+                {
+                    let layers = &order[..k];
                     let mut b = BlendBuffers::new(n);
                     let mut out = vec![Transform::IDENTITY; n];
-                    b.blend(&bind, &layers[..k], &[], &mut out).unwrap();
+                    b.blend(&bind, layers, &[], &mut out).unwrap();
                     let mut want = vec![Transform::IDENTITY; n];
-                    reference_blend(&bind, &layers[..k], &mut want);
+                    reference_blend(&bind, layers, &mut want);
                     assert_eq!(bits(&out), bits(&want), "{n} joints, {k} layers");
                     // The baseline (SSE2) copy gives the same bits as the AVX copy.
                     let mut base = vec![Transform::IDENTITY; n];
-                    crate::cpu::baseline(|| b.blend(&bind, &layers[..k], &[], &mut base)).unwrap();
+                    crate::cpu::baseline(|| b.blend(&bind, layers, &[], &mut base)).unwrap();
                     assert_eq!(bits(&out), bits(&base), "{n} joints, {k} layers, baseline");
+                    // Total weights as the reference sums them.
+                    for j in 0..n {
+                        let w = layers.iter().fold(0.0f32, |t, l| {
+                            let w = l.weight * l.mask.map_or(1.0, |m| m[j]);
+                            let times = l.driven.iter().filter(|&&d| d as usize == j).count();
+                            (0..times).fold(t, |t, _| if w > 0.0 { t + w } else { t })
+                        });
+                        assert_eq!(b.total_weight(j).map(f32::to_bits), Some(w.to_bits()));
+                    }
                 }
             }
         }

@@ -2,8 +2,9 @@
 //!
 //! These are the functions the runtime, the baker and the verifier all call, so that a bake checked
 //! against the runtime is a bit-for-bit comparison. Every function has a fixed order of floating-point
-//! operations: no reassociation, no runtime-selected code path (glam's SIMD is chosen at compile time),
-//! no threading inside. The same inputs give the same bits on every call.
+//! operations: no reassociation, no FMA, no threading inside. The copies chosen at run time (AVX, see
+//! `crate::cpu`; [`skin`]'s two-vertices-per-register kernel) perform the same operations in the same
+//! order, so the same inputs give the same bits on every call and every x86_64 CPU.
 //!
 //! Inputs are validated up front (lengths, parent order, joint indices); a bad input is a
 //! [`SkinError`], never a panic. On a joint-index error [`skin`] has already written the vertices before

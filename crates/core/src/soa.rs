@@ -159,11 +159,7 @@ pub(crate) fn write_transforms(block: &[Vec4], lanes: u8, out: &mut [Transform])
     let s = glam::Mat4::from_cols(block[S], block[S + 1], block[S + 2], Vec4::ZERO).transpose();
     for (l, o) in out.iter_mut().enumerate().take(4) {
         if lanes & (1 << l) != 0 {
-            *o = Transform {
-                translation: t.col(l).truncate(),
-                rotation: glam::Quat::from_vec4(r.col(l)),
-                scale: s.col(l).truncate(),
-            };
+            o.store(t.col(l), r.col(l), s.col(l));
         }
     }
 }

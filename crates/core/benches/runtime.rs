@@ -13,8 +13,8 @@ use criterion::measurement::{ValueFormatter, WallTime};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{
-    local_to_model, local_to_model_and_palette, skin, skinning_palette, Animator, BlendBuffers,
-    ClipBinding, Layer, Sampler, Transform,
+    local_to_model, local_to_model_and_palette, skin, skin_with, skinning_palette, Animator,
+    BlendBuffers, ClipBinding, Layer, NormalTransform, Sampler, Transform,
 };
 use std::hint::black_box;
 use std::sync::Arc;
@@ -174,6 +174,24 @@ fn skinning<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
         bench.iter(|| {
             skin(
                 &palette, &positions, &normals, &joints, &weights, &mut out_p, &mut out_n,
+            )
+            .unwrap();
+            black_box((&out_p, &out_n));
+        })
+    });
+    // Normals through the blended matrix itself, not normalised: ozz's SkinningJob without
+    // inverse-transpose matrices (its `lbs4_positions_normals_100k` row).
+    g.bench_function("lbs4_positions_normals_100k_blended_matrix", |bench| {
+        bench.iter(|| {
+            skin_with(
+                NormalTransform::BlendedMatrix,
+                &palette,
+                &positions,
+                &normals,
+                &joints,
+                &weights,
+                &mut out_p,
+                &mut out_n,
             )
             .unwrap();
             black_box((&out_p, &out_n));

@@ -45,10 +45,11 @@
 //!
 //! Nothing here allocates: all state lives in the [`BlendBuffers`].
 
+use crate::cpu::multiversion;
 use crate::skeleton::JointIndex;
-use crate::soa::normalize_rotation;
+use crate::soa;
 use crate::Transform;
-use glam::{Quat, Vec3, Vec3A};
+use glam::{Quat, Vec3, Vec4};
 
 /// Why a blend step was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -129,88 +130,124 @@ impl<'a> Layer<'a> {
     }
 }
 
-#[derive(Debug, Clone, Copy)]
-struct Accum {
-    translation: Vec3A,
-    scale: Vec3A,
-    rotation: Quat,
-    weight: f32,
-}
-
-const ZERO: Accum = Accum {
-    translation: Vec3A::ZERO,
-    scale: Vec3A::ZERO,
-    rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 0.0),
-    weight: 0.0,
-};
-
 /// Preallocated accumulators for blending poses of one skeleton size. Make once, reuse every frame.
+///
+/// The sums are kept four joints per block, one SIMD lane per joint (see `crate::soa`): a layer is
+/// added a block at a time (blocks its mask or weight leaves out are skipped), and the resolve
+/// normalises four rotations with one square root and one division. Every lane does the per-joint
+/// arithmetic of the module docs in the same order, so the results are the same bits as adding and
+/// resolving joint by joint (tested against that reference).
 #[derive(Debug, Clone)]
 pub struct BlendBuffers {
-    accum: Vec<Accum>,
+    joints: usize,
+    /// [`soa::ACCUM`] vectors per block: translation, rotation, scale sums and the total weight.
+    accum: Vec<Vec4>,
+    /// Scratch: per block, the lanes the layer being added drives.
+    driven: Vec<u8>,
+    /// Per block, the lanes of joints that exist (all four but in a last, partial block).
+    every: Vec<u8>,
+    /// The sums are to be read as zero ([`BlendBuffers::reset`] only sets this; the next layer
+    /// writes every block instead of adding to it, which saves a pass over the buffer).
+    fresh: bool,
 }
 
 impl BlendBuffers {
     /// Buffers for a skeleton of `joints` joints.
     pub fn new(joints: usize) -> Self {
+        let blocks = soa::block_count(joints);
         Self {
-            accum: vec![ZERO; joints],
+            joints,
+            accum: vec![Vec4::ZERO; blocks * soa::ACCUM],
+            driven: vec![0; blocks],
+            every: (0..blocks)
+                .map(|b| 0b1111u8 >> (4 * b + 4).saturating_sub(joints).min(4))
+                .collect(),
+            fresh: false,
         }
     }
 
     /// Number of joints the buffers were made for.
     pub fn joint_count(&self) -> usize {
-        self.accum.len()
+        self.joints
     }
 
     /// Clears the accumulated weights; call before the first layer of a frame.
     pub fn reset(&mut self) {
-        self.accum.fill(ZERO);
+        self.fresh = true;
+    }
+
+    /// Writes the zeros a [`BlendBuffers::reset`] stands for.
+    fn materialize(&mut self) {
+        if self.fresh {
+            self.accum.fill(Vec4::ZERO);
+            self.fresh = false;
+        }
     }
 
     /// Total normal-layer weight accumulated so far on each joint.
     pub fn total_weight(&self, joint: usize) -> Option<f32> {
-        self.accum.get(joint).map(|a| a.weight)
+        if joint >= self.joints {
+            return None;
+        }
+        let w = self.accum.get((joint / 4) * soa::ACCUM + soa::W)?;
+        Some(if self.fresh { 0.0 } else { w[joint % 4] })
     }
 
     /// Adds a normal (non-additive) layer. See the module docs for the arithmetic.
     pub fn accumulate(&mut self, layer: &Layer<'_>) -> Result<(), BlendError> {
-        let n = self.accum.len();
+        let n = self.joints;
         layer.check(n)?;
-        let pose = layer.pose;
-        let accum = &mut self.accum[..];
-        for &j in layer.driven {
-            let ju = j as usize;
-            let (Some(p), Some(a)) = (pose.get(ju), accum.get_mut(ju)) else {
-                return Err(BlendError::JointIndex {
-                    joint: j,
-                    joints: n,
-                });
-            };
-            let w = match layer.mask {
-                Some(m) => layer.weight * m.get(ju).copied().unwrap_or(0.0),
-                None => layer.weight,
-            };
-            if w.is_nan() || w <= 0.0 {
-                continue;
-            }
-            let q = if a.rotation.dot(p.rotation) < 0.0 {
-                -p.rotation
-            } else {
-                p.rotation
-            };
-            a.translation += Vec3A::from(p.translation) * w;
-            a.scale += Vec3A::from(p.scale) * w;
-            a.rotation += q * w;
-            a.weight += w;
+        // A layer that drives every joint in order (a whole-body clip) drives every lane.
+        if layer.driven.len() == n && n <= 1 << 16 && in_order(layer.driven) {
+            accumulate_blocks(&mut self.accum, &self.every, layer, self.fresh);
+            self.fresh = false;
+            return Ok(());
         }
-        Ok(())
+        // The lanes of each block the layer drives. A joint index outside the skeleton, or one
+        // listed twice, sends the layer the per-joint way, which adds the joints in the order
+        // listed (twice for a joint listed twice) and stops at a bad index, as documented.
+        self.driven.fill(0);
+        let mut by_blocks = true;
+        // The current block's lanes are kept in a register and stored when the block changes (a
+        // sorted list, the usual case, visits each block once).
+        let (mut block, mut lanes) = (usize::MAX, 0u8);
+        for &j in layer.driven {
+            let j = j as usize;
+            if j >= n {
+                by_blocks = false;
+                break;
+            }
+            if j / 4 != block {
+                if let Some(d) = self.driven.get_mut(block) {
+                    *d = lanes;
+                }
+                block = j / 4;
+                lanes = self.driven.get(block).copied().unwrap_or(0);
+            }
+            let bit = 1u8 << (j % 4);
+            if lanes & bit != 0 {
+                by_blocks = false;
+                break;
+            }
+            lanes |= bit;
+        }
+        if let Some(d) = self.driven.get_mut(block) {
+            *d = lanes;
+        }
+        if by_blocks {
+            accumulate_blocks(&mut self.accum, &self.driven, layer, self.fresh);
+            self.fresh = false;
+            Ok(())
+        } else {
+            self.materialize();
+            accumulate_joints(&mut self.accum, n, layer)
+        }
     }
 
     /// Writes the blend of the accumulated normal layers to `out`, filling with the bind pose where the
     /// total weight is below 1 and normalising where it is above.
     pub fn resolve(&self, bind: &[Transform], out: &mut [Transform]) -> Result<(), BlendError> {
-        let n = self.accum.len();
+        let n = self.joints;
         if bind.len() != n {
             return Err(BlendError::Length {
                 what: "bind pose",
@@ -225,36 +262,11 @@ impl BlendBuffers {
                 got: out.len(),
             });
         }
-        for ((a, b), o) in self.accum.iter().zip(bind).zip(out.iter_mut()) {
-            let w = a.weight;
-            *o = if w == 1.0 {
-                // Dividing a non-NaN value by exactly 1 changes no bits: skip the two divisions.
-                Transform {
-                    translation: Vec3::from(a.translation),
-                    rotation: normalize_rotation(a.rotation),
-                    scale: Vec3::from(a.scale),
-                }
-            } else if w >= 1.0 {
-                Transform {
-                    translation: Vec3::from(a.translation / w),
-                    rotation: normalize_rotation(a.rotation),
-                    scale: Vec3::from(a.scale / w),
-                }
-            } else if w > 0.0 {
-                let rest = 1.0 - w;
-                let br = if a.rotation.dot(b.rotation) < 0.0 {
-                    -b.rotation
-                } else {
-                    b.rotation
-                };
-                Transform {
-                    translation: Vec3::from(a.translation + Vec3A::from(b.translation) * rest),
-                    rotation: normalize_rotation(a.rotation + br * rest),
-                    scale: Vec3::from(a.scale + Vec3A::from(b.scale) * rest),
-                }
-            } else {
-                *b
-            };
+        if self.fresh {
+            // Nothing accumulated since the reset: every joint is the bind pose.
+            out.copy_from_slice(bind);
+        } else {
+            resolve_blocks(&self.accum, bind, out);
         }
         Ok(())
     }
@@ -277,6 +289,178 @@ impl BlendBuffers {
             apply_additive(out, l)?;
         }
         Ok(())
+    }
+}
+
+/// Whether `driven` is `0, 1, 2, ...` (for a list as long as the skeleton: every joint, in order).
+/// Eight indices at a time, with no early exit, so that it compiles to a few vector operations.
+fn in_order(driven: &[JointIndex]) -> bool {
+    let mut want: [JointIndex; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
+    let mut differ = [0; 8];
+    let eights = driven.chunks_exact(8);
+    let rest = eights.remainder();
+    for e in eights {
+        for k in 0..8 {
+            differ[k] |= e[k] ^ want[k];
+            want[k] = want[k].wrapping_add(8);
+        }
+    }
+    differ.iter().all(|&d| d == 0) && rest.iter().zip(want).all(|(&j, w)| j == w)
+}
+
+multiversion! {
+    /// Adds `layer` to `accum` a block at a time; `driven` holds the lanes it drives per block (each
+    /// joint once, all inside the skeleton). `fresh`: `accum` is to be read as zeros (every block
+    /// is written).
+    fn accumulate_blocks(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) -> ()
+        => accumulate_blocks_generic;
+}
+
+#[inline(always)]
+fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) {
+    if fresh {
+        add_blocks::<true>(accum, driven, layer);
+    } else {
+        add_blocks::<false>(accum, driven, layer);
+    }
+}
+
+/// [`accumulate_blocks`] with `FRESH` = `fresh`. Adding to a zero read from memory and adding to a
+/// zero in a register are the same operation: a fresh buffer gives the bits a cleared one gives.
+#[inline(always)]
+fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>) {
+    let weight = Vec4::splat(layer.weight);
+    let blocks = accum.chunks_exact_mut(soa::ACCUM).zip(driven);
+    for (b, (a, &d)) in blocks.enumerate() {
+        let Ok(a) = <&mut [Vec4; soa::ACCUM]>::try_from(a) else {
+            continue;
+        };
+        if d == 0 {
+            if FRESH {
+                *a = [Vec4::ZERO; soa::ACCUM];
+            }
+            continue;
+        }
+        let first = 4 * b;
+        // `layer.weight * mask[j]` per lane, as the per-joint code multiplies them.
+        let w = match layer.mask {
+            Some(m) => match m.get(first..first + 4) {
+                Some(m4) => weight * Vec4::from_slice(m4),
+                None => {
+                    let m = m.get(first..).unwrap_or(&[]);
+                    let lane = |l: usize| m.get(l).copied().unwrap_or(0.0);
+                    weight * Vec4::new(lane(0), lane(1), lane(2), lane(3))
+                }
+            },
+            None => weight,
+        };
+        // Lanes that contribute: driven, with a weight above zero (NaN excluded). The others take
+        // zero values at weight zero, adding +0 or -0 to sums that are never -0: no change, and a
+        // joint the layer leaves out is never read.
+        let on = soa::lanes(d) & w.cmpgt(Vec4::ZERO);
+        if !on.any() {
+            if FRESH {
+                *a = [Vec4::ZERO; soa::ACCUM];
+            }
+            continue;
+        }
+        let mut sums = if FRESH { [Vec4::ZERO; soa::ACCUM] } else { *a };
+        let w = soa::select(on, w, Vec4::ZERO);
+        let block = match layer.pose.get(first..first + 4) {
+            Some(four) => soa::block_of(four),
+            None => soa::block_of(layer.pose.get(first..).unwrap_or(&[])),
+        };
+        // (Lanes left out are zeroed so that a value the layer does not provide is never read.)
+        let p = if on.all() {
+            block
+        } else {
+            block.map(|v| soa::select(on, v, Vec4::ZERO))
+        };
+        let s = &mut sums;
+        let acc_r = [s[soa::R], s[soa::R + 1], s[soa::R + 2], s[soa::R + 3]];
+        let q =
+            soa::negate_where_negative(soa::rotation(&p), soa::dot_q(&acc_r, &soa::rotation(&p)));
+        for c in 0..3 {
+            s[soa::T + c] += p[soa::T + c] * w;
+            s[soa::S + c] += p[soa::S + c] * w;
+        }
+        for (c, v) in q.into_iter().enumerate() {
+            s[soa::R + c] += v * w;
+        }
+        s[soa::W] += w;
+        *a = sums;
+    }
+}
+
+/// Adds `layer` joint by joint, in the order it lists them, into lane `j % 4` of block `j / 4`;
+/// stops with an error at a joint outside the skeleton (`joints`). Scalar operations, the same as
+/// the lanes' in [`accumulate_blocks`].
+fn accumulate_joints(
+    accum: &mut [Vec4],
+    joints: usize,
+    layer: &Layer<'_>,
+) -> Result<(), BlendError> {
+    for &j in layer.driven {
+        let ju = j as usize;
+        let block = accum.get_mut((ju / 4) * soa::ACCUM..(ju / 4 + 1) * soa::ACCUM);
+        let (Some(p), Some(a), true) = (layer.pose.get(ju), block, ju < joints) else {
+            return Err(BlendError::JointIndex { joint: j, joints });
+        };
+        let w = match layer.mask {
+            Some(m) => layer.weight * m.get(ju).copied().unwrap_or(0.0),
+            None => layer.weight,
+        };
+        if w.is_nan() || w <= 0.0 {
+            continue;
+        }
+        let l = ju % 4;
+        let sum = Quat::from_xyzw(
+            a[soa::R][l],
+            a[soa::R + 1][l],
+            a[soa::R + 2][l],
+            a[soa::R + 3][l],
+        );
+        let q = if sum.dot(p.rotation) < 0.0 {
+            -p.rotation
+        } else {
+            p.rotation
+        };
+        let (t, r, s) = (p.translation.to_array(), q.to_array(), p.scale.to_array());
+        for c in 0..3 {
+            a[soa::T + c][l] += t[c] * w;
+            a[soa::S + c][l] += s[c] * w;
+        }
+        for (c, v) in r.into_iter().enumerate() {
+            a[soa::R + c][l] += v * w;
+        }
+        a[soa::W][l] += w;
+    }
+    Ok(())
+}
+
+multiversion! {
+    /// Resolves every block of `accum` into `out` (`bind` and `out` hold one transform per joint).
+    fn resolve_blocks(accum: &[Vec4], bind: &[Transform], out: &mut [Transform]) -> ()
+        => resolve_blocks_generic;
+}
+
+#[inline(always)]
+fn resolve_blocks_generic(accum: &[Vec4], bind: &[Transform], out: &mut [Transform]) {
+    let blocks = accum
+        .chunks_exact(soa::ACCUM)
+        .zip(bind.chunks(4))
+        .zip(out.chunks_mut(4));
+    for ((a, b4), o4) in blocks {
+        // The bind pose is read only where some lane's total weight is not exactly 1.
+        let w = a.get(soa::W).copied().unwrap_or(Vec4::ONE);
+        let bind_block = if w.cmpeq(Vec4::ONE).all() {
+            [Vec4::ZERO; soa::COMPONENTS]
+        } else {
+            soa::block_of(b4)
+        };
+        let mut o = [Vec4::ZERO; soa::COMPONENTS];
+        soa::resolve(a, &bind_block, &mut o);
+        soa::write_transforms(&o, 0b1111, o4);
     }
 }
 
@@ -316,6 +500,164 @@ pub fn apply_additive(base: &mut [Transform], layer: &Layer<'_>) -> Result<(), B
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3A;
+
+    #[derive(Debug, Clone, Copy)]
+    struct Accum {
+        translation: Vec3A,
+        scale: Vec3A,
+        rotation: Quat,
+        weight: f32,
+    }
+
+    /// The per-joint blend as it was before the accumulators were kept four joints per block: the
+    /// reference the blend must match bit for bit.
+    fn reference_blend(bind: &[Transform], layers: &[Layer<'_>], out: &mut [Transform]) {
+        use crate::rotation::normalize_rotation;
+        let zero = Accum {
+            translation: Vec3A::ZERO,
+            scale: Vec3A::ZERO,
+            rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 0.0),
+            weight: 0.0,
+        };
+        let mut accum = vec![zero; bind.len()];
+        for layer in layers {
+            for &j in layer.driven {
+                let (p, a) = (&layer.pose[j as usize], &mut accum[j as usize]);
+                let w = match layer.mask {
+                    Some(m) => layer.weight * m[j as usize],
+                    None => layer.weight,
+                };
+                if w.is_nan() || w <= 0.0 {
+                    continue;
+                }
+                let q = if a.rotation.dot(p.rotation) < 0.0 {
+                    -p.rotation
+                } else {
+                    p.rotation
+                };
+                a.translation += Vec3A::from(p.translation) * w;
+                a.scale += Vec3A::from(p.scale) * w;
+                a.rotation += q * w;
+                a.weight += w;
+            }
+        }
+        for ((a, b), o) in accum.iter().zip(bind).zip(out.iter_mut()) {
+            let w = a.weight;
+            *o = if w == 1.0 {
+                Transform {
+                    translation: Vec3::from(a.translation),
+                    rotation: normalize_rotation(a.rotation),
+                    scale: Vec3::from(a.scale),
+                }
+            } else if w >= 1.0 {
+                Transform {
+                    translation: Vec3::from(a.translation / w),
+                    rotation: normalize_rotation(a.rotation),
+                    scale: Vec3::from(a.scale / w),
+                }
+            } else if w > 0.0 {
+                let rest = 1.0 - w;
+                let br = if a.rotation.dot(b.rotation) < 0.0 {
+                    -b.rotation
+                } else {
+                    b.rotation
+                };
+                Transform {
+                    translation: Vec3::from(a.translation + Vec3A::from(b.translation) * rest),
+                    rotation: normalize_rotation(a.rotation + br * rest),
+                    scale: Vec3::from(a.scale + Vec3A::from(b.scale) * rest),
+                }
+            } else {
+                *b
+            };
+        }
+    }
+
+    #[test]
+    fn blend_matches_the_per_joint_reference_bit_for_bit() {
+        let mut seed = 0x9e37_79b9u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed >> 8) as f32 / (1u32 << 23) as f32 - 1.0
+        };
+        let bits = |t: &[Transform]| -> Vec<u32> {
+            t.iter()
+                .flat_map(|t| {
+                    let mut v = t.translation.to_array().to_vec();
+                    v.extend(t.rotation.to_array());
+                    v.extend(t.scale.to_array());
+                    v
+                })
+                .map(f32::to_bits)
+                .collect()
+        };
+        for n in [1, 3, 4, 5, 8, 23, 40] {
+            let mut pose = || -> Vec<Transform> {
+                (0..n)
+                    .map(|_| {
+                        Transform::new(
+                            Vec3::new(next(), next(), next()) * 10.0,
+                            Quat::from_xyzw(next(), next(), next(), next()),
+                            Vec3::new(next(), next(), next()) + 1.5,
+                        )
+                    })
+                    .collect()
+            };
+            let (bind, mut p1, p2, mut p3) = (pose(), pose(), pose(), pose());
+            // Values the blend must never read: a joint masked to 0, a joint a layer does not drive.
+            p1[0].translation.x = f32::NAN;
+            if n > 1 {
+                p3[1].scale.y = f32::INFINITY;
+            }
+            // Masks reaching every regime: 0, between 0 and 1, 1, and totals above 1; a NaN.
+            let levels = [0.0, 0.25, 1.0, 0.7, 0.5, 1.0, f32::NAN, 0.0];
+            let m1: Vec<f32> = (0..n).map(|j| levels[j % 8]).collect();
+            let m2: Vec<f32> = (0..n).map(|j| levels[(j * 3 + 1) % 8]).collect();
+            let all: Vec<JointIndex> = (0..n as JointIndex).collect();
+            let some: Vec<JointIndex> = (0..n as JointIndex).filter(|j| j % 3 != 1).collect();
+            // Out of order, with a joint listed twice: the per-joint way.
+            let twice: Vec<JointIndex> = (0..n as JointIndex).rev().chain([0]).collect();
+            for weight in [1.0, 0.6, 2.0] {
+                let layers = [
+                    Layer::new(&p1, &all).with_mask(&m1),
+                    Layer::new(&p2, &some).with_weight(weight),
+                    Layer::new(&p3, &some).with_mask(&m2).with_weight(weight),
+                    Layer::new(&p2, &twice).with_mask(&m2).with_weight(0.3),
+                ];
+                // Every prefix, and every suffix in reverse order (each kind of layer comes first
+                // after a reset at some point: whole-body, partial, and the per-joint way).
+                let mut reversed = layers.to_vec();
+                reversed.reverse();
+                for (k, order) in
+                    (0..=layers.len()).flat_map(|k| [(k, &layers[..]), (k, &reversed[..])])
+                {
+                    let layers = &order[..k];
+                    let mut b = BlendBuffers::new(n);
+                    let mut out = vec![Transform::IDENTITY; n];
+                    b.blend(&bind, layers, &[], &mut out).unwrap();
+                    let mut want = vec![Transform::IDENTITY; n];
+                    reference_blend(&bind, layers, &mut want);
+                    assert_eq!(bits(&out), bits(&want), "{n} joints, {k} layers");
+                    // The baseline (SSE2) copy gives the same bits as the AVX copy.
+                    let mut base = vec![Transform::IDENTITY; n];
+                    crate::cpu::baseline(|| b.blend(&bind, layers, &[], &mut base)).unwrap();
+                    assert_eq!(bits(&out), bits(&base), "{n} joints, {k} layers, baseline");
+                    // Total weights as the reference sums them.
+                    for j in 0..n {
+                        let w = layers.iter().fold(0.0f32, |t, l| {
+                            let w = l.weight * l.mask.map_or(1.0, |m| m[j]);
+                            let times = l.driven.iter().filter(|&&d| d as usize == j).count();
+                            (0..times).fold(t, |t, _| if w > 0.0 { t + w } else { t })
+                        });
+                        assert_eq!(b.total_weight(j).map(f32::to_bits), Some(w.to_bits()));
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn single_full_layer_is_passed_through() {

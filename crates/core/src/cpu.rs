@@ -7,6 +7,9 @@
 //! not the arithmetic, and FMA is never enabled because fusing a multiply with an add changes rounding.
 //! So results are the same bits on every x86_64 CPU; unit tests run both copies and compare them.
 //!
+//! Skinning goes further on AVX: its kernel (`crate::skin_avx`) is written with AVX intrinsics, two
+//! vertices per 256-bit register, each half doing the portable loop's operations in its order.
+//!
 //! One loop has a third form: decoding compressed keys, whose per-lane variable bit shifts have no SSE2
 //! or AVX instruction, is also written with AVX2 integer intrinsics and used when the CPU has AVX2.
 //! Integer shifts and masks are exact, and its float operations are the portable code's, so it too

@@ -18,6 +18,7 @@ pub mod clip;
 pub mod compressed;
 mod cpu;
 mod rotation;
+mod skin_avx;
 pub use cpu::set_baseline_only;
 pub mod format;
 pub mod mesh;
@@ -36,7 +37,8 @@ pub use mesh::{
 };
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
 pub use skinning::{
-    local_to_model, local_to_model_and_palette, skin, skin_lod, skinning_palette, SkinError,
+    local_to_model, local_to_model_and_palette, skin, skin_lod, skin_with, skinning_palette,
+    NormalTransform, SkinError,
 };
 pub use transform::Transform;
 

@@ -2,8 +2,9 @@
 //!
 //! These are the functions the runtime, the baker and the verifier all call, so that a bake checked
 //! against the runtime is a bit-for-bit comparison. Every function has a fixed order of floating-point
-//! operations: no reassociation, no runtime-selected code path (glam's SIMD is chosen at compile time),
-//! no threading inside. The same inputs give the same bits on every call.
+//! operations: no reassociation, no FMA, no threading inside. The copies chosen at run time (AVX, see
+//! `crate::cpu`; [`skin`]'s two-vertices-per-register kernel) perform the same operations in the same
+//! order, so the same inputs give the same bits on every call and every x86_64 CPU.
 //!
 //! Inputs are validated up front (lengths, parent order, joint indices); a bad input is a
 //! [`SkinError`], never a panic. On a joint-index error [`skin`] has already written the vertices before
@@ -11,6 +12,7 @@
 
 use crate::cpu::multiversion;
 use crate::skeleton::JointIndex;
+use crate::skin_avx::Normals;
 use crate::soa::Splats;
 use crate::{soa, Lod, Transform, MAX_INFLUENCES};
 use glam::{Mat4, Vec3, Vec3A, Vec3Swizzles, Vec4};
@@ -334,39 +336,70 @@ fn mul_affine(a: &Mat4, b: &Mat4) -> Mat4 {
     )
 }
 
-multiversion! {
-    /// Linear blend skinning of positions and normals with four influences per vertex.
-    ///
-    /// For vertex `v` with joints `j` and weights `w`, the blended matrix is, column by column and in this
-    /// order, `((P[j0]*w0 + P[j1]*w1) + P[j2]*w2) + P[j3]*w3` (only the upper 3x4 part is used; the palette's
-    /// bottom row is assumed to be `0 0 0 1`).
-    ///
-    /// - **Positions**: `M * (x, y, z, 1)`.
-    /// - **Normals**: transformed by the *cofactor* matrix of `M`'s 3x3 part `A` (columns `a0 a1 a2`):
-    ///   `n' = n.x*(a1×a2) + n.y*(a2×a0) + n.z*(a0×a1)`, negated when `det A < 0`, then normalised. That is
-    ///   the inverse-transpose up to a positive factor, which renormalisation removes, so normals stay
-    ///   perpendicular to the surface under non-uniform scale and mirroring, without a matrix inverse. A
-    ///   normal that ends up zero-length (degenerate matrix or zero input) is written as zero.
-    /// - **Zero weights are included**: all four influences are always blended (a weight of 0 adds
-    ///   exactly `0 * P[j]`), so the loop has no data-dependent branch and the operation order never
-    ///   changes. Consequently all four joint indices of every vertex must be valid, even with weight 0.
-    ///   Weights are used as given; they are not renormalised.
-    ///
-    /// `normals` and `out_normals` may both be empty to skin positions only; otherwise every per-vertex
-    /// slice must have the same length as `positions`.
-    pub fn skin(
-        palette: &[Mat4],
-        positions: &[Vec3],
-        normals: &[Vec3],
-        joints: &[[u16; MAX_INFLUENCES]],
-        weights: &[[f32; MAX_INFLUENCES]],
-        out_positions: &mut [Vec3],
-        out_normals: &mut [Vec3],
-    ) -> Result<(), SkinError> => skin_generic;
+/// Linear blend skinning of positions and normals with four influences per vertex.
+///
+/// For vertex `v` with joints `j` and weights `w`, the blended matrix is, column by column and in this
+/// order, `((P[j0]*w0 + P[j1]*w1) + P[j2]*w2) + P[j3]*w3` (only the upper 3x4 part is used; the palette's
+/// bottom row is assumed to be `0 0 0 1`).
+///
+/// - **Positions**: `M * (x, y, z, 1)`.
+/// - **Normals**: transformed by the *cofactor* matrix of `M`'s 3x3 part `A` (columns `a0 a1 a2`):
+///   `n' = n.x*(a1×a2) + n.y*(a2×a0) + n.z*(a0×a1)`, negated when `det A < 0`, then normalised. That is
+///   the inverse-transpose up to a positive factor, which renormalisation removes, so normals stay
+///   perpendicular to the surface under non-uniform scale and mirroring, without a matrix inverse. A
+///   normal that ends up zero-length (degenerate matrix or zero input) is written as zero.
+/// - **Zero weights are included**: all four influences are always blended (a weight of 0 adds
+///   exactly `0 * P[j]`), so the loop has no data-dependent branch and the operation order never
+///   changes. Consequently all four joint indices of every vertex must be valid, even with weight 0.
+///   Weights are used as given; they are not renormalised.
+///
+/// `normals` and `out_normals` may both be empty to skin positions only; otherwise every per-vertex
+/// slice must have the same length as `positions`.
+///
+/// On x86_64 CPUs with AVX this runs two vertices per 256-bit register (`crate::skin_avx`), with the
+/// same operations in the same order: the same bits as the portable code, which runs elsewhere.
+/// [`skin_with`] offers a cheaper treatment of normals.
+pub fn skin(
+    palette: &[Mat4],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    joints: &[[u16; MAX_INFLUENCES]],
+    weights: &[[f32; MAX_INFLUENCES]],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) -> Result<(), SkinError> {
+    skin_with(
+        NormalTransform::Cofactor,
+        palette,
+        positions,
+        normals,
+        joints,
+        weights,
+        out_positions,
+        out_normals,
+    )
 }
 
-#[inline(always)]
-fn skin_generic(
+/// How [`skin_with`] transforms normals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum NormalTransform {
+    /// Through the cofactor of the blended 3x3, sign-corrected and normalised: what [`skin`] does.
+    /// Correct under non-uniform scale, shear and mirroring; unit-length output.
+    #[default]
+    Cofactor,
+    /// Through the blended matrix's 3x3 part itself, `((a0*n.x + a1*n.y) + a2*n.z)`, not normalised:
+    /// what ozz-animation's `SkinningJob` does when it is given no inverse-transpose matrices. Exact
+    /// (up to length) when every joint's palette matrix is a rotation times a uniform scale; under
+    /// non-uniform scale or shear the normal leans off the surface, and the caller normalises (often
+    /// in the vertex shader) if it needs unit normals. About a third cheaper than the cofactor.
+    BlendedMatrix,
+}
+
+/// [`skin`] with a choice of how normals are transformed ([`NormalTransform`]); positions are the
+/// same bits whichever is chosen, and with [`NormalTransform::Cofactor`] this is [`skin`].
+#[allow(clippy::too_many_arguments)]
+pub fn skin_with(
+    normal_transform: NormalTransform,
     palette: &[Mat4],
     positions: &[Vec3],
     normals: &[Vec3],
@@ -384,50 +417,130 @@ fn skin_generic(
         same_len("normals", n, normals.len())?;
         same_len("output normals", n, out_normals.len())?;
     }
-    // Every per-vertex slice has length `n` (checked above), so the zips visit every vertex.
-    if with_normals {
-        // Two passes per chunk of vertices: the first blends, writes the position and keeps the
-        // unnormalised normal and the determinant's three products; the second sums the
-        // determinant, corrects the sign and normalises. Separating the long
-        // square-root-and-divide latency from the blend lets the CPU overlap many vertices. The
-        // operations on each vertex are the same as in one pass.
-        let mut pending = [(Vec3A::ZERO, Vec3A::ZERO); CHUNK];
-        let chunks = positions
-            .chunks(CHUNK)
-            .zip(normals.chunks(CHUNK))
-            .zip(joints.chunks(CHUNK))
-            .zip(weights.chunks(CHUNK))
-            .zip(out_positions.chunks_mut(CHUNK))
-            .zip(out_normals.chunks_mut(CHUNK));
-        for (c, (((((ps, ns), js), ws), ops), ons)) in chunks.enumerate() {
-            let mut done = 0;
-            let mut error = None;
-            let vertices = ps.iter().zip(ns).zip(js).zip(ws).zip(ops.iter_mut());
-            for (((((p, n), j), w), op), r) in vertices.zip(pending.iter_mut()) {
-                match blend(palette, j, w, c * CHUNK + done) {
-                    Ok(m) => {
-                        *op = transform_point(&m, *p);
-                        *r = cofactor_normal(&m, *n);
-                        done += 1;
-                    }
-                    Err(e) => {
-                        error = Some(e);
-                        break;
+    let mode = match (with_normals, normal_transform) {
+        (false, _) => Normals::None,
+        (true, NormalTransform::Cofactor) => Normals::Cofactor,
+        (true, NormalTransform::BlendedMatrix) => Normals::Matrix,
+    };
+    #[allow(unused_mut)]
+    let mut done = 0;
+    #[cfg(target_arch = "x86_64")]
+    if crate::cpu::use_avx() {
+        // SAFETY: `use_avx` is true only when the running CPU has AVX, which is all that
+        // `skin_pairs` requires; it reads and writes through checked slices only.
+        #[allow(unsafe_code)]
+        {
+            done = unsafe {
+                crate::skin_avx::skin_pairs(
+                    palette,
+                    positions,
+                    normals,
+                    joints,
+                    weights,
+                    out_positions,
+                    out_normals,
+                    mode,
+                )
+            };
+        }
+    }
+    // The portable code finishes: an odd last vertex, the pair with a bad joint index (which it
+    // reports), or everything on a CPU without AVX.
+    fn rest<T>(v: &[T], done: usize) -> &[T] {
+        v.get(done..).unwrap_or(&[])
+    }
+    skin_generic(
+        mode,
+        done,
+        palette,
+        rest(positions, done),
+        if with_normals {
+            rest(normals, done)
+        } else {
+            &[]
+        },
+        rest(joints, done),
+        rest(weights, done),
+        out_positions.get_mut(done..).unwrap_or(&mut []),
+        if with_normals {
+            out_normals.get_mut(done..).unwrap_or(&mut [])
+        } else {
+            &mut []
+        },
+    )
+}
+
+/// The portable loop of [`skin_with`] on slices of equal length (checked by the caller), whose first
+/// vertex is vertex `first` of the mesh (for error reports).
+#[allow(clippy::too_many_arguments)]
+fn skin_generic(
+    mode: Normals,
+    first: usize,
+    palette: &[Mat4],
+    positions: &[Vec3],
+    normals: &[Vec3],
+    joints: &[[u16; MAX_INFLUENCES]],
+    weights: &[[f32; MAX_INFLUENCES]],
+    out_positions: &mut [Vec3],
+    out_normals: &mut [Vec3],
+) -> Result<(), SkinError> {
+    // Every per-vertex slice has the same length (checked by the caller), so the zips visit every
+    // vertex.
+    match mode {
+        Normals::Cofactor => {
+            // Two passes per chunk of vertices: the first blends, writes the position and keeps the
+            // unnormalised normal and the determinant's three products; the second sums the
+            // determinant, corrects the sign and normalises. Separating the long
+            // square-root-and-divide latency from the blend lets the CPU overlap many vertices. The
+            // operations on each vertex are the same as in one pass.
+            let mut pending = [(Vec3A::ZERO, Vec3A::ZERO); CHUNK];
+            let chunks = positions
+                .chunks(CHUNK)
+                .zip(normals.chunks(CHUNK))
+                .zip(joints.chunks(CHUNK))
+                .zip(weights.chunks(CHUNK))
+                .zip(out_positions.chunks_mut(CHUNK))
+                .zip(out_normals.chunks_mut(CHUNK));
+            for (c, (((((ps, ns), js), ws), ops), ons)) in chunks.enumerate() {
+                let mut done = 0;
+                let mut error = None;
+                let vertices = ps.iter().zip(ns).zip(js).zip(ws).zip(ops.iter_mut());
+                for (((((p, n), j), w), op), r) in vertices.zip(pending.iter_mut()) {
+                    match blend(palette, j, w, first + c * CHUNK + done) {
+                        Ok(m) => {
+                            *op = transform_point(&m, *p);
+                            *r = cofactor_normal(&m, *n);
+                            done += 1;
+                        }
+                        Err(e) => {
+                            error = Some(e);
+                            break;
+                        }
                     }
                 }
-            }
-            for (&(r, d), on) in pending[..done].iter().zip(ons.iter_mut()) {
-                *on = normalize_yzx(r, d);
-            }
-            if let Some(e) = error {
-                return Err(e);
+                for (&(r, d), on) in pending[..done].iter().zip(ons.iter_mut()) {
+                    *on = normalize_yzx(r, d);
+                }
+                if let Some(e) = error {
+                    return Err(e);
+                }
             }
         }
-    } else {
-        let inputs = positions.iter().zip(joints).zip(weights).enumerate();
-        for ((v, ((p, j), w)), op) in inputs.zip(out_positions.iter_mut()) {
-            let m = blend(palette, j, w, v)?;
-            *op = transform_point(&m, *p);
+        Normals::Matrix => {
+            let inputs = positions.iter().zip(normals).zip(joints).zip(weights);
+            let outputs = out_positions.iter_mut().zip(out_normals.iter_mut());
+            for (v, ((((p, n), j), w), (op, on))) in inputs.zip(outputs).enumerate() {
+                let m = blend(palette, j, w, first + v)?;
+                *op = transform_point(&m, *p);
+                *on = (m[0] * n.x + m[1] * n.y + m[2] * n.z).truncate();
+            }
+        }
+        Normals::None => {
+            let inputs = positions.iter().zip(joints).zip(weights).enumerate();
+            for ((v, ((p, j), w)), op) in inputs.zip(out_positions.iter_mut()) {
+                let m = blend(palette, j, w, first + v)?;
+                *op = transform_point(&m, *p);
+            }
         }
     }
     Ok(())

@@ -31,7 +31,7 @@ pub(crate) fn block_count(joints: usize) -> usize {
 
 /// `v`'s lanes where `mask` is set, `fallback`'s elsewhere.
 #[inline(always)]
-fn select(mask: BVec4A, v: Vec4, fallback: Vec4) -> Vec4 {
+pub(crate) fn select(mask: BVec4A, v: Vec4, fallback: Vec4) -> Vec4 {
     Vec4::select(mask, v, fallback)
 }
 
@@ -64,7 +64,8 @@ pub(crate) fn dot_q(a: &[Vec4; 4], b: &[Vec4; 4]) -> Vec4 {
     (a[0] * b[0] + a[2] * b[2]) + (a[1] * b[1] + a[3] * b[3])
 }
 
-/// `q * (1 / |q|)` per lane: the runtime's normalisation ([`normalize_rotation`] for one quaternion).
+/// `q * (1 / |q|)` per lane: the runtime's normalisation
+/// ([`normalize_rotation`](crate::rotation::normalize_rotation) for one quaternion).
 /// One division per four quaternions instead of four: the divider, not the adders, is what limits
 /// sampling and blending, and the result is within an ulp of `q / |q|`.
 #[inline(always)]
@@ -72,8 +73,6 @@ pub(crate) fn normalize_q(q: [Vec4; 4]) -> [Vec4; 4] {
     let inv = Vec4::ONE / sqrt4(dot_q(&q, &q));
     q.map(|c| c * inv)
 }
-
-pub(crate) use crate::rotation::normalize_rotation;
 
 /// `q` negated (multiplied by -1, as glam's `-q`) in the lanes where `d < 0`.
 #[inline(always)]
@@ -160,11 +159,7 @@ pub(crate) fn write_transforms(block: &[Vec4], lanes: u8, out: &mut [Transform])
     let s = glam::Mat4::from_cols(block[S], block[S + 1], block[S + 2], Vec4::ZERO).transpose();
     for (l, o) in out.iter_mut().enumerate().take(4) {
         if lanes & (1 << l) != 0 {
-            *o = Transform {
-                translation: t.col(l).truncate(),
-                rotation: glam::Quat::from_vec4(r.col(l)),
-                scale: s.col(l).truncate(),
-            };
+            o.store(t.col(l), r.col(l), s.col(l));
         }
     }
 }
@@ -290,7 +285,8 @@ pub(crate) fn sample_block(
 
 /// Vectors per accumulator block: translation 3, rotation 4, scale 3, total weight 1.
 pub(crate) const ACCUM: usize = 11;
-const W: usize = 10;
+/// The total weight's vector in an accumulator block.
+pub(crate) const W: usize = 10;
 
 /// Adds one sampled block `p` of a normal layer (plan block `pb`) to the accumulators (see
 /// [`crate::blend`] for the arithmetic, which this follows lane for lane). `mask` holds one vector of
@@ -393,6 +389,7 @@ pub(crate) fn splats(m: &Mat4) -> Splats {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rotation::normalize_rotation;
     use glam::{Quat, Vec3};
 
     #[test]

@@ -2,6 +2,10 @@
 //! and the sampled symmetric Hausdorff distance between two meshes. The LOD builder reports it as a
 //! floor under its error (so the reported error bounds what a measurement finds) and the previews
 //! print it under each LOD.
+//!
+//! `crates/testdata/src/geometry.rs` has its own point-to-triangle distance and grid on purpose: the
+//! tests measure LODs with code that is not the code under test (and check that grid against a
+//! brute-force scan).
 
 use sinew_core::glam::Vec3;
 

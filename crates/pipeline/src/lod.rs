@@ -475,12 +475,14 @@ fn flat_soup(lod: &Lod) -> Lod {
 
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
 /// Returns the new LOD (compacted and optimised) and the relative error of this step.
+/// `keep`: positions (bit patterns) whose vertices are locked (the part extremes of LOD 0).
 fn simplify_step(
     source: &Lod,
     skeleton: Option<&Skeleton>,
     target_triangles: usize,
     max_error: f32,
     tuning: &LodTuning,
+    keep: &HashSet<[u32; 3]>,
 ) -> (Lod, f32) {
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     let attrs = attributes(source, skeleton);
@@ -501,12 +503,9 @@ fn simplify_step(
         flags |= SimplifyOptions::Permissive;
     }
     let mut locks = vertex_flags(source);
-    if tuning.lock_part_extremes {
-        let extremes = crate::lod_parts::part_extremes(&source.positions, &source.indices);
-        for (l, e) in locks.iter_mut().zip(extremes) {
-            if e {
-                *l = SimplifyVertex::Lock;
-            }
+    for (l, p) in locks.iter_mut().zip(&source.positions) {
+        if keep.contains(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]) {
+            *l = SimplifyVertex::Lock;
         }
     }
     let total = source.triangle_count().max(1);
@@ -767,6 +766,19 @@ pub fn build_lods_tuned(
         meshopt::simplify_scale_decoder(&positions)
     };
     let base_tris = mesh.geometry.triangle_count();
+    // Part extremes are found once, on LOD 0, and kept through the chain: a part simplified below
+    // `lod_parts::SMALL_PART` triangles in one step must keep them in the next.
+    let keep: HashSet<[u32; 3]> = if tuning.lock_part_extremes {
+        let g = &mesh.geometry;
+        crate::lod_parts::part_extremes(&g.positions, &g.indices)
+            .into_iter()
+            .zip(&g.positions)
+            .filter(|(e, _)| *e)
+            .map(|(_, p)| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .collect()
+    } else {
+        HashSet::new()
+    };
     // The measured distance to LOD 0 is a floor under each reported error (see `MEASURE_MARGIN`).
     let base_grid = TriangleGrid::new(&mesh.geometry.positions, &mesh.geometry.indices);
     // LOD 0's vertices only: what simplification loses shows at the vertices it removed (on the
@@ -789,7 +801,7 @@ pub fn build_lods_tuned(
             mesh: mesh.name.clone(),
             problem: format!("after welding: {problem}"),
         })?;
-        let (lod, step_error) = simplify_step(&welded, skeleton, target, budget, tuning);
+        let (lod, step_error) = simplify_step(&welded, skeleton, target, budget, tuning, &keep);
         let mut lod = if flat { flat_soup(&lod) } else { lod };
         accumulated = if tuning.chain {
             accumulated + step_error

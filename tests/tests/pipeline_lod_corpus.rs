@@ -399,3 +399,40 @@ fn cesium_man_posed_closer_than_skin_blind_simplification() {
         );
     }
 }
+
+/// gltfpack 1.3.0 on zombie.ms3d (exported to glTF by `sinew export`): `-si 0.4986 -sa -noq` reaches
+/// 361 triangles at 2.211% of the diagonal (`../shared/peers/lod_hausdorff.py`, docs/lod.md).
+const GLTFPACK_ZOMBIE: (usize, f32) = (361, 2.211);
+
+/// The repair step (docs/lod.md): zombie's LOD 1 lost a shape feature to the attribute terms
+/// (2.725% at about gltfpack's count, farther than gltfpack); locking the far vertices and building
+/// the step again keeps it. Checked at gltfpack's count and at the default 50%.
+#[test]
+fn zombie_at_least_as_close_as_gltfpack_at_rest() {
+    let Some(scene) = load("ms3d/zombie.ms3d") else {
+        return;
+    };
+    let (tris, rest) = GLTFPACK_ZOMBIE;
+    let base = &scene.meshes[0].geometry;
+    let diag = diagonal(&base.positions);
+    let mut nominal = scene.clone();
+    generate_lods(&mut nominal, &LodOptions::default()).unwrap();
+    let matched = chain_at(&scene, &[tris]);
+    for lod in [
+        &matched.meshes[0].lods[0].lod,
+        &nominal.meshes[0].lods[0].lod,
+    ] {
+        assert!(
+            lod.triangle_count().abs_diff(tris) <= 8,
+            "{}",
+            lod.triangle_count()
+        );
+        let r =
+            hausdorff(&base.positions, &base.indices, &lod.positions, &lod.indices) / diag * 100.0;
+        assert!(
+            r <= rest,
+            "{} triangles: rest {r:.3}% vs gltfpack {rest}%",
+            lod.triangle_count()
+        );
+    }
+}

@@ -259,6 +259,11 @@ fn main() {
                 DEFAULT_MAX_ERROR,
             ),
             (
+                "no-repair",
+                with(&|t| t.repair_far_vertices = false),
+                DEFAULT_MAX_ERROR,
+            ),
+            (
                 "not-permissive",
                 with(&|t| t.permissive = false),
                 DEFAULT_MAX_ERROR,

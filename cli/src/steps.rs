@@ -453,14 +453,28 @@ pub fn lod_options(args: &LodArgs) -> anyhow::Result<Option<LodOptions>> {
 
 /// Replaces every mesh's generated LODs by a new chain, or removes them for `None`.
 pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyhow::Result<()> {
+    let Scene {
+        meshes, skeleton, ..
+    } = scene;
+    mesh_lods(meshes, skeleton.as_ref(), options, file)
+}
+
+/// [`lods`] on a scene's meshes alone (`skeleton` is the scene's), so that its clips can be worked
+/// on at the same time.
+pub fn mesh_lods(
+    meshes: &mut [sinew_scene::Mesh],
+    skeleton: Option<&sinew_core::Skeleton>,
+    options: Option<&LodOptions>,
+    file: &str,
+) -> anyhow::Result<()> {
     match options {
         None => {
-            for m in &mut scene.meshes {
+            for m in meshes {
                 m.lods.clear();
             }
         }
         Some(o) => {
-            sinew_pipeline::lod::generate_lods(scene, o)
+            sinew_pipeline::lod::generate_mesh_lods(meshes, skeleton, o, &Default::default())
                 .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
         }
     }

@@ -15,11 +15,12 @@ use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
-use sinew_pipeline::compile::{CompileOptions, CompileReport};
+use sinew_core::Skeleton;
+use sinew_pipeline::compile::{compile_compressed, compress_clips, CompileReport, CompressedClips};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
-use sinew_scene::Scene;
+use sinew_scene::{Scene, SceneClip};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -92,11 +93,33 @@ pub fn write_scene(
     output: &Path,
     compress: Option<&CompressOptions>,
 ) -> anyhow::Result<Written> {
-    let options = CompileOptions {
-        compress: compress.cloned(),
-    };
-    let (asset, report) = sinew_pipeline::compile::compile_with(scene, &options)
-        .map_err(|e| anyhow!("{input}: compiling: {e}"))?;
+    let compressed = compress_scene_clips(&scene.clips, scene.skeleton.as_ref(), input, compress)?;
+    write_compressed(scene, input, output, compressed)
+}
+
+/// The clip half of [`write_scene`]: a scene's clips compiled and compressed (`None` without
+/// compression); `skeleton` is the scene's.
+fn compress_scene_clips(
+    clips: &[SceneClip],
+    skeleton: Option<&Skeleton>,
+    input: &str,
+    compress: Option<&CompressOptions>,
+) -> anyhow::Result<Option<CompressedClips>> {
+    compress
+        .map(|o| compress_clips(clips, skeleton, o))
+        .transpose()
+        .map_err(|e| anyhow!("{input}: compiling: {e}"))
+}
+
+/// The rest of [`write_scene`], with the clips [`compress_scene_clips`] gave for this scene.
+fn write_compressed(
+    scene: &Scene,
+    input: &str,
+    output: &Path,
+    compressed: Option<CompressedClips>,
+) -> anyhow::Result<Written> {
+    let (asset, report) =
+        compile_compressed(scene, compressed).map_err(|e| anyhow!("{input}: compiling: {e}"))?;
     let bytes = sinew_core::format::write(&asset).map_err(|e| anyhow!("{input}: writing: {e}"))?;
     write_atomic(output, &bytes)?;
     Ok(Written {
@@ -141,7 +164,29 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
         )?);
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
-    steps::lods(&mut scene, plan.lod.as_ref(), &label)?;
+    // LODs (meshes) and clip compression (clips) read and write different parts of the scene and
+    // are the two costly steps: they run at the same time. Each gives what it gives alone; a LOD
+    // error is reported first, as when they ran in turn.
+    let (lods, compressed) = rayon::join(
+        || {
+            steps::mesh_lods(
+                &mut scene.meshes,
+                scene.skeleton.as_ref(),
+                plan.lod.as_ref(),
+                &label,
+            )
+        },
+        || {
+            compress_scene_clips(
+                &scene.clips,
+                scene.skeleton.as_ref(),
+                &label,
+                plan.compress.as_ref(),
+            )
+        },
+    );
+    lods?;
+    let compressed = compressed?;
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .map_err(|e| anyhow!("{}: cannot create the folder: {e}", dir.display()))?;
@@ -161,7 +206,7 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
             textures.push(path.display().to_string());
         }
     }
-    let written = write_scene(&scene, &label, output, plan.compress.as_ref())?;
+    let written = write_compressed(&scene, &label, output, compressed)?;
     let mut d = details(&scene, written, motions, cuts, splits);
     d.textures = textures;
     Ok(d)

@@ -16,8 +16,8 @@
 use crate::compress::{compress_clip, ClipCompressionReport, CompressOptions, PARALLEL_VOLUME};
 use rayon::prelude::*;
 use sinew_core::format::{self, Asset, FormatError, LodInfo, Material, SourceVertexMap};
-use sinew_core::{Clip, ClipError, Mesh};
-use sinew_scene::Scene;
+use sinew_core::{Clip, ClipError, Mesh, Skeleton};
+use sinew_scene::{Scene, SceneClip};
 
 /// Why a scene could not be compiled.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -37,6 +37,11 @@ pub enum CompileError {
 
 /// Compiles a scene into a runtime asset. Deterministic: the same scene gives the same asset.
 pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
+    compile_parts(scene, None)
+}
+
+/// [`compile`] with the clips already compiled (and possibly compressed) when `clips` is given.
+fn compile_parts(scene: &Scene, clips: Option<Vec<Clip>>) -> Result<Asset, CompileError> {
     let mut meshes = Vec::with_capacity(scene.meshes.len());
     let mut lod_info = Vec::with_capacity(scene.meshes.len());
     let mut source_vertex = Vec::with_capacity(scene.meshes.len());
@@ -73,24 +78,10 @@ pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
         });
         lod_info.push(info);
     }
-    let clips = scene
-        .clips
-        .iter()
-        .map(|c| {
-            Clip::from_curves(
-                c.name.clone(),
-                c.duration,
-                c.sample_rate,
-                c.looping,
-                c.additive,
-                c.tracks.clone(),
-            )
-            .map_err(|source| CompileError::Clip {
-                clip: c.name.clone(),
-                source,
-            })
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let clips = match clips {
+        Some(c) => c,
+        None => compile_clips(&scene.clips)?,
+    };
     let materials = scene
         .materials
         .iter()
@@ -112,6 +103,27 @@ pub fn compile(scene: &Scene) -> Result<Asset, CompileError> {
     };
     format::validate(&asset)?;
     Ok(asset)
+}
+
+/// Each scene clip as a [`Clip`] ([`Clip::from_curves`]), in order.
+fn compile_clips(clips: &[SceneClip]) -> Result<Vec<Clip>, CompileError> {
+    clips
+        .iter()
+        .map(|c| {
+            Clip::from_curves(
+                c.name.clone(),
+                c.duration,
+                c.sample_rate,
+                c.looping,
+                c.additive,
+                c.tracks.clone(),
+            )
+            .map_err(|source| CompileError::Clip {
+                clip: c.name.clone(),
+                source,
+            })
+        })
+        .collect()
 }
 
 /// Options of [`compile_with`].
@@ -143,39 +155,57 @@ pub fn compile_with(
     scene: &Scene,
     options: &CompileOptions,
 ) -> Result<(Asset, CompileReport), CompileError> {
-    let mut asset = compile(scene)?;
-    let mut report = CompileReport::default();
-    if let Some(o) = &options.compress {
-        // Clips are independent: compressed in parallel, results kept in clip order (the same
-        // bytes at any thread count).
-        // Small scenes stay on the calling thread (see `PARALLEL_VOLUME`).
-        let skeleton = asset.skeleton.as_ref();
-        let volume: usize = asset
-            .clips
+    let compressed = match &options.compress {
+        Some(o) => Some(compress_clips(&scene.clips, scene.skeleton.as_ref(), o)?),
+        None => None,
+    };
+    compile_compressed(scene, compressed)
+}
+
+/// A scene's clips compiled and compressed, in clip order, with one report each: the clip part of
+/// [`compile_with`], for callers that do it beside other work on the same scene (the LODs, which
+/// touch only the meshes) and finish with [`compile_compressed`].
+pub type CompressedClips = (Vec<Clip>, Vec<ClipCompressionReport>);
+
+/// Compiles `clips` and compresses each (see [`compile_with`]); `skeleton` is the scene's.
+pub fn compress_clips(
+    clips: &[SceneClip],
+    skeleton: Option<&Skeleton>,
+    options: &CompressOptions,
+) -> Result<CompressedClips, CompileError> {
+    let clips = compile_clips(clips)?;
+    // Clips are independent: compressed in parallel, results kept in clip order (the same bytes
+    // at any thread count). Small scenes stay on the calling thread (see `PARALLEL_VOLUME`).
+    let volume: usize = clips
+        .iter()
+        .map(|c| c.times().len() * c.tracks().len())
+        .sum();
+    let done: Vec<(Clip, ClipCompressionReport)> = if clips.len() > 1 && volume >= PARALLEL_VOLUME {
+        clips
+            .par_iter()
+            .map(|clip| compress_clip(clip, skeleton, options))
+            .collect()
+    } else {
+        clips
             .iter()
-            .map(|c| c.times().len() * c.tracks().len())
-            .sum();
-        let done: Vec<(Clip, ClipCompressionReport)> =
-            if asset.clips.len() > 1 && volume >= PARALLEL_VOLUME {
-                asset
-                    .clips
-                    .par_iter()
-                    .map(|clip| compress_clip(clip, skeleton, o))
-                    .collect()
-            } else {
-                asset
-                    .clips
-                    .iter()
-                    .map(|clip| compress_clip(clip, skeleton, o))
-                    .collect()
-            };
-        for (clip, (c, r)) in asset.clips.iter_mut().zip(done) {
-            *clip = c;
-            report.clips.push(r);
-        }
-        format::validate(&asset)?;
-    }
-    Ok((asset, report))
+            .map(|clip| compress_clip(clip, skeleton, options))
+            .collect()
+    };
+    Ok(done.into_iter().unzip())
+}
+
+/// Compiles a scene like [`compile`] with the clips of [`compress_clips`] (for the same scene
+/// clips) in place of its own; `None` compiles them plain, as [`compile`] does.
+pub fn compile_compressed(
+    scene: &Scene,
+    compressed: Option<CompressedClips>,
+) -> Result<(Asset, CompileReport), CompileError> {
+    let (clips, reports) = match compressed {
+        Some((clips, reports)) => (Some(clips), reports),
+        None => (None, Vec::new()),
+    };
+    let asset = compile_parts(scene, clips)?;
+    Ok((asset, CompileReport { clips: reports }))
 }
 
 /// Compiles a scene and encodes it as `.sinew` bytes.

@@ -24,6 +24,7 @@
 
 use crate::surface::{farthest, sample_points, used_vertices, TriangleGrid};
 use meshopt::{SimplifyOptions, SimplifyVertex};
+use rayon::prelude::*;
 use sinew_core::glam;
 use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
@@ -904,17 +905,35 @@ pub fn generate_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
+    let Scene {
+        meshes, skeleton, ..
+    } = scene;
+    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning)
+}
+
+/// [`generate_lods_tuned`] on a scene's meshes alone, so that a caller can work on the scene's clips
+/// at the same time. Meshes are independent: they run in parallel (rayon), each with the same
+/// result as alone; the first failing mesh in mesh order gives the error.
+pub fn generate_mesh_lods(
+    meshes: &mut [Mesh],
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+) -> Result<Vec<MeshLodReport>, LodError> {
     options.validate()?;
-    let skeleton = scene.skeleton.clone();
-    let mut reports = Vec::with_capacity(scene.meshes.len());
-    for mesh in &mut scene.meshes {
+    let one = |mesh: &mut Mesh| -> Result<MeshLodReport, LodError> {
         optimize_base(mesh)?;
-        mesh.lods = build_lods_tuned(mesh, skeleton.as_ref(), options, tuning)?;
-        reports.push(MeshLodReport {
+        mesh.lods = build_lods_tuned(mesh, skeleton, options, tuning)?;
+        Ok(MeshLodReport {
             mesh: mesh.name.clone(),
             base_triangles: mesh.geometry.triangle_count(),
             lods: mesh.lods.clone(),
-        });
-    }
-    Ok(reports)
+        })
+    };
+    let done: Vec<Result<MeshLodReport, LodError>> = if meshes.len() > 1 {
+        meshes.par_iter_mut().map(one).collect()
+    } else {
+        meshes.iter_mut().map(one).collect()
+    };
+    done.into_iter().collect()
 }

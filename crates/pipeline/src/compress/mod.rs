@@ -14,7 +14,8 @@
 //!
 //! 1. Channels that one value (their middle value, or the bind value when a skeleton is given and the
 //!    clip is not additive; the identity difference for additive clips) reproduces within a quarter of
-//!    the tolerance are stored as constants or not at all.
+//!    the tolerance are stored as constants or not at all; a channel the source already holds
+//!    constant becomes a bind channel when the bind value reproduces it likewise.
 //! 2. Keys that linear interpolation between their neighbours reproduces are dropped (whole keys, so
 //!    the runtime still reads one record per key: time-major), once for each key budget of
 //!    `KEY_BUDGETS` (fractions of the tolerance; the rest is left to quantization).

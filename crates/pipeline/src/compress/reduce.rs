@@ -208,6 +208,18 @@ pub(super) fn simplify_channels(
             };
             let d = defaults[i];
             match ch {
+                // A channel the source already holds constant becomes the bind value when that
+                // reproduces it (sources often key every joint, most at its rest value): a bind
+                // channel costs nothing beyond its track's kind byte, a constant 12 or 16 bytes.
+                0 if matches!(tr.t, WChan::Constant(_)) && d.is_some() => {
+                    with(&|t: &mut WTrack| t.t = WChan::Bind);
+                }
+                1 if matches!(tr.r, WChan::Constant(_)) && d.is_some() => {
+                    with(&|t: &mut WTrack| t.r = WChan::Bind);
+                }
+                2 if matches!(tr.s, WChan::Constant(_)) && d.is_some() => {
+                    with(&|t: &mut WTrack| t.s = WChan::Bind);
+                }
                 0 => {
                     if let WChan::Keys(v) = &tr.t {
                         if d.is_some() {

@@ -223,3 +223,66 @@ fn max_effort_is_never_larger_than_the_default() {
         assert!(fast > 0 && default > 0, "{keys} keys");
     }
 }
+
+#[test]
+fn constant_channels_at_the_bind_value_are_stored_as_bind() {
+    // Sources often key every joint, most at its rest value: such a channel arrives constant and
+    // costs 12 or 16 bytes as a constant, nothing as a bind channel. One that differs from the
+    // bind value by more than the tolerance stays constant.
+    let skeleton = chain(4, 0.3);
+    let swinging = swing(&skeleton, 31);
+    let times = swinging.times().to_vec();
+    let bent = Quat::from_rotation_z(0.2);
+    let mut tracks: Vec<TrackCurves> = (0..2)
+        .map(|j| TrackCurves {
+            joint: format!("j{j}"),
+            rotation: Curve::new(
+                times.clone(),
+                (0..times.len())
+                    .map(|k| Quat::from_rotation_x(0.5 * (k as f32 * 0.2 + j as f32).sin()))
+                    .collect(),
+            ),
+            ..Default::default()
+        })
+        .collect();
+    let hold = |v: Vec3| Curve::new(times.clone(), vec![v; times.len()]);
+    tracks.push(TrackCurves {
+        joint: "j2".into(),
+        translation: hold(Vec3::Y * 0.3),
+        rotation: Curve::new(times.clone(), vec![Quat::IDENTITY; times.len()]),
+        scale: hold(Vec3::ONE),
+    });
+    tracks.push(TrackCurves {
+        joint: "j3".into(),
+        translation: hold(Vec3::Y * 0.3),
+        rotation: Curve::new(times.clone(), vec![bent; times.len()]),
+        scale: hold(Vec3::ONE),
+    });
+    let clip =
+        Clip::from_curves("hold", times[times.len() - 1], 30.0, false, false, tracks).unwrap();
+    let source = clip.to_plain();
+    assert!(matches!(
+        source.tracks()[2].translation,
+        sinew_core::Channel::Constant(_)
+    ));
+    let (c, r) = compress_clip(&clip, Some(&skeleton), &CompressOptions::peers());
+    assert!(c.is_compressed(), "{r:?}");
+    assert!(r.max_error <= 0.001, "{r:?}");
+    use sinew_core::Channel::{Bind, Constant};
+    let t = &c.tracks()[2];
+    assert!(matches!(
+        (t.translation, t.rotation, t.scale),
+        (Bind, Bind, Bind)
+    ));
+    let t = &c.tracks()[3];
+    assert!(matches!((t.translation, t.scale), (Bind, Bind)));
+    match t.rotation {
+        Constant(q) => assert!(q.angle_between(bent) < 1e-5, "{q}"),
+        other => panic!("j3 rotation {other:?}"),
+    }
+    // Without a skeleton there is no bind value: the held channels stay constants.
+    let (c, _) = compress_clip(&clip, None, &CompressOptions::peers());
+    let t = &c.tracks()[2];
+    assert!(matches!(t.translation, Constant(v) if v == Vec3::Y * 0.3));
+    assert!(matches!(t.scale, Constant(v) if v == Vec3::ONE));
+}

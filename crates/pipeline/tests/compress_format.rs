@@ -127,7 +127,8 @@ fn ranges_offset(c: &Clip) -> usize {
         })
         .sum();
     let mut at = pad(32 + 4 * c.times().len());
-    at = pad(at + 8 * c.tracks().len());
+    // Short track table: a u16 name per track, then a byte of kinds per track.
+    at = pad(at + 3 * c.tracks().len());
     pad(at + 4 * constants)
 }
 
@@ -147,17 +148,25 @@ fn rotation_index_offset(c: &Clip) -> usize {
 }
 
 #[test]
-fn compressed_clip_round_trips_and_header_says_1_4() {
+fn compressed_clip_round_trips_and_header_says_1_5() {
     let (bytes, c) = compressed_file();
-    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 4);
+    assert_eq!(u16::from_le_bytes([bytes[10], bytes[11]]), 5);
     let back = format::read(&bytes).unwrap();
     assert_eq!(back.clips[0], c);
     let rec = clip_record_offset(&bytes);
-    // Flags: bit 2 (compressed) and bit 3 (compact) set.
+    // Flags: bit 2 (compressed), bit 3 (compact) and bit 4 (short track table) set.
     assert_eq!(
         u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap()),
-        12
+        28
     );
+    // The short track table: u16 names (the clip's name is string 0, "root" and "spine" follow),
+    // then one byte per track: 2 bits of kind per channel (0 bind, 1 constant, 3 quantized).
+    let tt = rec + pad(32 + 4 * c.times().len());
+    let u16_at = |i: usize| u16::from_le_bytes([bytes[i], bytes[i + 1]]);
+    assert_eq!((u16_at(tt), u16_at(tt + 2)), (1, 2));
+    // root: translation and rotation quantized, scale bind; spine: rotation and scale quantized.
+    assert_eq!(bytes[tt + 4], 3 | 3 << 2);
+    assert_eq!(bytes[tt + 5], 3 << 2 | 3 << 4);
     // The segment entries sit where docs/format.md says: the first one's bit width is its first byte.
     let parts = c.quantized_parts().unwrap();
     assert_eq!(bytes[rec + segments_offset(&c)], parts.segments[0].bits);
@@ -199,6 +208,74 @@ fn reader_rejects_a_bad_rotation_index_entry_and_a_compact_flag_alone() {
     // Bit 3 without bit 2 is not a layout.
     let mut b = bytes;
     b[rec + 4..rec + 8].copy_from_slice(&8u32.to_le_bytes());
+    fix_crcs(&mut b);
+    let e = format::read(&b).unwrap_err();
+    assert!(e.to_string().contains("clip flags"), "{e}");
+}
+
+/// The same file with the clip's track table in the 8-byte form of format 1.4 (u32 name, four kind
+/// bytes per track), built by hand from the documented layouts: the CLIP section must be the last.
+fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
+    let rec = clip_record_offset(bytes);
+    let tt = rec + pad(32 + 4 * c.times().len());
+    let tracks = c.tracks().len();
+    let mut table = Vec::new();
+    for t in 0..tracks {
+        let name = u16::from_le_bytes([bytes[tt + 2 * t], bytes[tt + 2 * t + 1]]);
+        let k = bytes[tt + 2 * tracks + t];
+        table.extend_from_slice(&u32::from(name).to_le_bytes());
+        table.extend_from_slice(&[k & 3, (k >> 2) & 3, (k >> 4) & 3, 0]);
+    }
+    table.resize(pad(table.len()), 0);
+    let old_len = pad(3 * tracks);
+    let delta = table.len() - old_len;
+    let mut out = bytes[..tt].to_vec();
+    out.extend_from_slice(&table);
+    out.extend_from_slice(&bytes[tt + old_len..]);
+    let flags = u32::from_le_bytes(out[rec + 4..rec + 8].try_into().unwrap()) & !16;
+    out[rec + 4..rec + 8].copy_from_slice(&flags.to_le_bytes());
+    out[10..12].copy_from_slice(&4u16.to_le_bytes());
+    let file_size = out.len() as u64;
+    out[16..24].copy_from_slice(&file_size.to_le_bytes());
+    let count = u32::from_le_bytes(out[32..36].try_into().unwrap()) as usize;
+    for i in 0..count {
+        let e = 48 + i * 32;
+        if &out[e..e + 4] == b"CLIP" {
+            let size = u64::from_le_bytes(out[e + 16..e + 24].try_into().unwrap());
+            out[e + 16..e + 24].copy_from_slice(&(size + delta as u64).to_le_bytes());
+        }
+    }
+    fix_crcs(&mut out);
+    out
+}
+
+#[test]
+fn a_1_4_record_with_the_long_track_table_reads_as_the_same_clip() {
+    let (bytes, c) = compressed_file();
+    let long = with_long_track_table(&bytes, &c);
+    let tracks = c.tracks().len();
+    assert_eq!(long.len(), bytes.len() + pad(8 * tracks) - pad(3 * tracks));
+    let back = format::read(&long).unwrap();
+    assert_eq!(back.clips[0], c);
+}
+
+#[test]
+fn reader_rejects_bad_short_track_kinds_and_a_short_flag_alone() {
+    let (bytes, c) = compressed_file();
+    let rec = clip_record_offset(&bytes);
+    let kinds = rec + pad(32 + 4 * c.times().len()) + 2 * c.tracks().len();
+    // Kind 2 (a plain animated channel) and the two top bits are not valid in a short table.
+    for bad in [bytes[kinds] | 2 << 4, bytes[kinds] | 0x40] {
+        let mut b = bytes.clone();
+        b[kinds] = bad;
+        fix_crcs(&mut b);
+        let e = format::read(&b).unwrap_err();
+        assert!(e.to_string().contains("channel kind"), "{e}");
+        assert_eq!(e.offset, Some(kinds as u64), "{e}");
+    }
+    // Bit 4 without bit 2 is not a layout.
+    let mut b = bytes;
+    b[rec + 4..rec + 8].copy_from_slice(&16u32.to_le_bytes());
     fix_crcs(&mut b);
     let e = format::read(&b).unwrap_err();
     assert!(e.to_string().contains("clip flags"), "{e}");

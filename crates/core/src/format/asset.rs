@@ -22,6 +22,10 @@ pub const VERSION_MINOR_GAME: u16 = 3;
 /// Minor version of files that hold compact compressed clips (clip flag bit 3, added in 1.4:
 /// rotation indices shared per segment, 16-bit rotation ranges), which older readers reject.
 pub const VERSION_MINOR_COMPACT: u16 = 4;
+/// Minor version of files that hold compressed clips with a short track table (clip flag bit 4,
+/// added in 1.5: u16 joint names and one byte of channel kinds per track), which older readers
+/// reject.
+pub const VERSION_MINOR_SHORT_TRACKS: u16 = 5;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).

@@ -19,6 +19,7 @@ pub use asset::{
     validate, Asset, LodInfo, Mask, Material, SectionInfo, SourceVertexMap, Tag, ALIGN,
     HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING, SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR,
     VERSION_MINOR, VERSION_MINOR_COMPACT, VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME,
+    VERSION_MINOR_SHORT_TRACKS,
 };
 pub use error::{FormatError, FormatErrorKind};
 pub use game::GameData;

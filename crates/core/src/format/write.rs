@@ -3,7 +3,7 @@
 use super::asset::{
     validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
     SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPACT,
-    VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME,
+    VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME, VERSION_MINOR_SHORT_TRACKS,
 };
 use super::error::FormatError;
 use crate::clip::Channel;
@@ -12,7 +12,7 @@ use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
 /// Encodes an asset as a `.sinew` file, version 1.1 (1.2 with compressed clips, 1.3 with game data,
-/// 1.4 with compact compressed clips).
+/// 1.4 with compact compressed clips, 1.5 with short track tables).
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -30,8 +30,11 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
     if !asset.meshes.is_empty() {
         sections.push((Tag::MESHES, meshes(asset, &mut strings)));
     }
+    let mut short_tracks = false;
     if !asset.clips.is_empty() {
-        sections.push((Tag::CLIPS, clips(&asset.clips, &mut strings)));
+        let (body, short) = clips(&asset.clips, &mut strings);
+        short_tracks = short;
+        sections.push((Tag::CLIPS, body));
     }
     if asset.source_vertex.iter().any(Option::is_some) {
         sections.push((Tag::SOURCE_VERTICES, source_vertices(asset)));
@@ -47,7 +50,9 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
         c.quantized_parts()
             .is_some_and(|p| !p.rotation_index.is_empty())
     });
-    let minor = if compact {
+    let minor = if short_tracks {
+        VERSION_MINOR_SHORT_TRACKS
+    } else if compact {
         VERSION_MINOR_COMPACT
     } else if !asset.game.is_empty() {
         VERSION_MINOR_GAME
@@ -348,6 +353,9 @@ pub(crate) const CLIP_QUANTIZED: u32 = 4;
 /// Clip flag (with [`CLIP_QUANTIZED`], since 1.4): compact record, with 16-bit rotation ranges and a
 /// table of per-segment rotation indices.
 pub(crate) const CLIP_COMPACT: u32 = 8;
+/// Clip flag (with [`CLIP_QUANTIZED`], since 1.5): short track table, u16 joint names and one byte
+/// of channel kinds per track.
+pub(crate) const CLIP_SHORT_TRACKS: u32 = 16;
 /// Compressed track table kind: quantized animated channel.
 pub(crate) const KIND_QUANTIZED: u8 = 3;
 
@@ -361,14 +369,23 @@ pub fn clip_record_size(clip: &Clip) -> usize {
     b.0.len()
 }
 
+/// Writes a compressed clip record; true when its track table is the short one (every joint name's
+/// string index fits in 16 bits, as it does in any file of fewer than 65,536 strings).
 fn compressed_record(
     b: &mut Buf,
     c: &Clip,
     parts: &crate::compressed::QuantizedParts,
     strings: &mut Strings,
-) {
+) -> bool {
     let start = b.0.len();
     let mut flags = CLIP_QUANTIZED;
+    // Strings in the order the record names them: the clip, then its tracks.
+    let name = strings.get(c.name());
+    let names: Vec<u32> = c.tracks().iter().map(|t| strings.get(&t.joint)).collect();
+    let short = names.iter().all(|&n| n <= u32::from(u16::MAX));
+    if short {
+        flags |= CLIP_SHORT_TRACKS;
+    }
     // `Clip::from_quantized` checked that the rotation ranges of such parts have 16-bit forms.
     let compact = !parts.rotation_index.is_empty();
     if compact {
@@ -380,7 +397,7 @@ fn compressed_record(
     if c.additive() {
         flags |= CLIP_ADDITIVE;
     }
-    b.u32(strings.get(c.name()));
+    b.u32(name);
     b.u32(flags);
     b.f32(c.duration());
     b.f32(c.sample_rate());
@@ -400,8 +417,8 @@ fn compressed_record(
         }
     };
     let mut constants = Vec::new();
+    let mut track_kinds = Vec::with_capacity(c.tracks().len());
     for t in c.tracks() {
-        b.u32(strings.get(&t.joint));
         let mut kinds = [0u8; 4];
         for (i, (is_const, is_anim)) in [
             (
@@ -422,7 +439,7 @@ fn compressed_record(
         {
             kinds[i] = kind(is_const, is_anim);
         }
-        b.bytes(&kinds);
+        track_kinds.push(kinds);
         if let Channel::Constant(v) = t.translation {
             constants.extend_from_slice(&v.to_array());
         }
@@ -431,6 +448,20 @@ fn compressed_record(
         }
         if let Channel::Constant(v) = t.scale {
             constants.extend_from_slice(&v.to_array());
+        }
+    }
+    if short {
+        // All names (u16), then all kinds (one byte: 2 bits per channel).
+        for &n in &names {
+            b.u16(n as u16);
+        }
+        for k in &track_kinds {
+            b.bytes(&[k[0] | k[1] << 2 | k[2] << 4]);
+        }
+    } else {
+        for (&n, k) in names.iter().zip(&track_kinds) {
+            b.u32(n);
+            b.bytes(k);
         }
     }
     align_from(b, start);
@@ -456,6 +487,7 @@ fn compressed_record(
         align_from(b, start);
     }
     b.bytes(&parts.data);
+    short
 }
 
 /// The component numbers of a compressed clip's rotations (three per animated rotation).
@@ -476,22 +508,24 @@ fn align_from(b: &mut Buf, start: usize) {
     b.zeros(n);
 }
 
-fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
+/// The `CLIP` section, and whether a record has a short track table.
+fn clips(list: &[Clip], strings: &mut Strings) -> (Vec<u8>, bool) {
     let mut b = Buf::default();
     b.u32(list.len() as u32);
     b.u32(TRACK_RECORD as u32);
     b.zeros(8);
+    let mut short = false;
     for c in list {
         b.align();
-        clip_record(&mut b, c, strings);
+        short |= clip_record(&mut b, c, strings);
     }
-    b.0
+    (b.0, short)
 }
 
-fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) {
+/// Writes one clip record; true when it is a compressed record with a short track table.
+fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) -> bool {
     if let Some(parts) = c.quantized_parts() {
-        compressed_record(b, c, parts, strings);
-        return;
+        return compressed_record(b, c, parts, strings);
     }
     let start = b.0.len();
     {
@@ -525,6 +559,7 @@ fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) {
         align_from(b, start);
         b.f32s(c.frames());
     }
+    false
 }
 
 /// SRCV: `u32 entry_count; 12 zero bytes;` then per entry, 16-aligned:

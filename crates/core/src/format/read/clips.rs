@@ -4,8 +4,8 @@ use super::cursor::{f32s_of, Cur, Result, Strs};
 use crate::clip::{Channel, Track};
 use crate::format::error::FormatErrorKind as K;
 use crate::format::write::{
-    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_QUANTIZED, ENCODING_F32, KIND_ANIMATED,
-    KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
+    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_QUANTIZED, CLIP_SHORT_TRACKS, ENCODING_F32,
+    KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
 };
 use crate::Clip;
 use glam::{Quat, Vec3};
@@ -80,9 +80,10 @@ pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
     let start = c.pos;
     let name = strs.read(c, "clip name string")?;
     let flags = c.u32()?;
-    let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | CLIP_COMPACT;
-    // The compact layout is a variant of the compressed one.
-    if flags & !known != 0 || (flags & CLIP_COMPACT != 0 && flags & CLIP_QUANTIZED == 0) {
+    let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | CLIP_COMPACT | CLIP_SHORT_TRACKS;
+    // The compact layout and the short track table are variants of the compressed layout.
+    let variants = CLIP_COMPACT | CLIP_SHORT_TRACKS;
+    if flags & !known != 0 || (flags & variants != 0 && flags & CLIP_QUANTIZED == 0) {
         return Err(c.err_at(
             start + 4,
             K::BadValue {
@@ -176,26 +177,49 @@ pub(super) fn compressed_clip(
     }
     let times = c.f32s(key_count.into(), "key times")?;
     c.align()?;
-    let track_count = c.check_count(track_count.into(), 8, "tracks")?;
+    let short = flags & CLIP_SHORT_TRACKS != 0;
+    let track_count = c.check_count(track_count.into(), if short { 3 } else { 8 }, "tracks")?;
     let mut kinds = Vec::with_capacity(track_count);
     let mut names = Vec::with_capacity(track_count);
-    for _ in 0..track_count {
-        names.push(strs.read(c, "track joint string")?);
-        let at = c.pos;
-        let k: [u8; 4] = c.array()?;
-        if k[..3]
-            .iter()
-            .any(|&x| !matches!(x, KIND_BIND | KIND_CONSTANT | KIND_QUANTIZED))
-        {
-            return Err(c.err_at(
-                at,
-                K::BadValue {
-                    what: "compressed channel kind",
-                    value: u64::from(u32::from_le_bytes(k)),
-                },
-            ));
+    let bad_kind = |c: &Cur, at: usize, value: u64| {
+        c.err_at(
+            at,
+            K::BadValue {
+                what: "compressed channel kind",
+                value,
+            },
+        )
+    };
+    let valid = |k: &[u8]| {
+        k.iter()
+            .all(|&x| matches!(x, KIND_BIND | KIND_CONSTANT | KIND_QUANTIZED))
+    };
+    if short {
+        // All names (u16 string indices), then one byte of kinds per track (2 bits per channel).
+        for _ in 0..track_count {
+            let at = c.pos;
+            let index = c.u16()?;
+            names.push(strs.get(c, at, index.into(), "track joint string")?);
         }
-        kinds.push(k);
+        for _ in 0..track_count {
+            let at = c.pos;
+            let b = c.u8()?;
+            let k = [b & 3, (b >> 2) & 3, (b >> 4) & 3, b >> 6];
+            if k[3] != 0 || !valid(&k[..3]) {
+                return Err(bad_kind(c, at, b.into()));
+            }
+            kinds.push(k);
+        }
+    } else {
+        for _ in 0..track_count {
+            names.push(strs.read(c, "track joint string")?);
+            let at = c.pos;
+            let k: [u8; 4] = c.array()?;
+            if !valid(&k[..3]) {
+                return Err(bad_kind(c, at, u32::from_le_bytes(k).into()));
+            }
+            kinds.push(k);
+        }
     }
     c.align()?;
     let const_floats: u64 = kinds

@@ -211,13 +211,33 @@ pub(super) fn simplify_channels(
                 // A channel the source already holds constant becomes the bind value when that
                 // reproduces it (sources often key every joint, most at its rest value): a bind
                 // channel costs nothing beyond its track's kind byte, a constant 12 or 16 bytes.
+                // The bind value itself (or the same rotation, negated) changes nothing and needs
+                // no measurement, which on files that key every channel is most of them.
                 0 if matches!(tr.t, WChan::Constant(_)) && d.is_some() => {
+                    if let (WChan::Constant(v), Some(d)) = (&tr.t, d) {
+                        if *v == d.translation {
+                            work.tracks[i].t = WChan::Bind;
+                            continue;
+                        }
+                    }
                     with(&|t: &mut WTrack| t.t = WChan::Bind);
                 }
                 1 if matches!(tr.r, WChan::Constant(_)) && d.is_some() => {
+                    if let (WChan::Constant(q), Some(d)) = (&tr.r, d) {
+                        if *q == d.rotation || -*q == d.rotation {
+                            work.tracks[i].r = WChan::Bind;
+                            continue;
+                        }
+                    }
                     with(&|t: &mut WTrack| t.r = WChan::Bind);
                 }
                 2 if matches!(tr.s, WChan::Constant(_)) && d.is_some() => {
+                    if let (WChan::Constant(v), Some(d)) = (&tr.s, d) {
+                        if *v == d.scale {
+                            work.tracks[i].s = WChan::Bind;
+                            continue;
+                        }
+                    }
                     with(&|t: &mut WTrack| t.s = WChan::Bind);
                 }
                 0 => {

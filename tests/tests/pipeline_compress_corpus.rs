@@ -282,3 +282,62 @@ fn peers_settings_beat_the_reference_sizes_of_ozz_and_acl() {
         assert_eq!(checked_clips, PEER_CLIPS.len());
     }
 }
+
+/// Small and near-static clips, where fixed per-clip costs decide (track table, constants,
+/// headers): gltf2ozz 0.16 and ACL 2.1 (at the clip's nominal rate, through
+/// `../shared/peers/gltf2acl.py`; MDL and BVH files exported to glTF by `sinew export` first),
+/// 0.001 units at 0.1 units, measured in session 7 (docs/performance.md, "Bind channels and short
+/// track tables"): (corpus file, clip, ozz-animation bytes, ACL bytes).
+const PEER_SMALL_CLIPS: [(&str, &str, usize, usize); 9] = [
+    ("gltf/RiggedFigure.glb", "animation0", 1_182, 234),
+    ("gltf/RiggedSimple.glb", "animation0", 357, 152),
+    ("gltf/SimpleSkin.gltf", "animation0", 409, 179),
+    (
+        "bvh/pfnn_hierarchy_crlf.bvh",
+        "pfnn_hierarchy_crlf",
+        2_270,
+        199,
+    ),
+    ("bvh/test_simple.bvh", "test_simple", 318, 206),
+    ("mdl/man.mdl", "reference", 532, 135),
+    ("mdl/man.mdl", "walk", 620, 356),
+    ("mdl/man.mdl", "arms_up.blend2", 537, 207),
+    ("mdl/sequence_transitions.mdl", "idle", 311, 135),
+];
+
+#[test]
+fn small_and_near_static_clips_are_smaller_than_ozz_and_acl() {
+    let mut checked = 0;
+    for (file, name, ozz, acl) in PEER_SMALL_CLIPS {
+        let Some(path) = sinew_testdata::corpus_file(file) else {
+            continue;
+        };
+        let scene = sinew_import::import_path(&path, &Default::default()).unwrap();
+        let plain = compile(&scene).unwrap();
+        let i = plain
+            .clips
+            .iter()
+            .position(|c| c.name() == name)
+            .unwrap_or_else(|| panic!("{file}: no clip {name}"));
+        let clip = &plain.clips[i];
+        let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &CompressOptions::peers());
+        assert!(c.is_compressed(), "{file} {name}: {r:?}");
+        let err = max_error(
+            plain.skeleton.as_ref(),
+            &scene.clips[i],
+            clip.times(),
+            &c,
+            0.1,
+        );
+        assert!(err <= 0.001, "{file} {name}: error {err}");
+        let size = clip_record_size(&c);
+        assert!(
+            size < ozz && size < acl,
+            "{file} {name}: {size} B, ozz {ozz} B, ACL {acl} B"
+        );
+        checked += 1;
+    }
+    if sinew_testdata::corpus().is_some() {
+        assert_eq!(checked, PEER_SMALL_CLIPS.len());
+    }
+}

@@ -819,11 +819,13 @@ pub fn build_lods_tuned(
             let base_accum = if tuning.chain { accumulated } else { 0.0 };
             let threshold = (base_accum + step_error) * scale;
             let grid = TriangleGrid::new(&lod.positions, &lod.indices);
+            // Only distances above the threshold matter: the search may stop at the first
+            // triangle within it (the kept distances are exact, the rest are dropped either way).
             let mut far: Vec<(f32, [u32; 3])> = base_vertices
                 .iter()
                 .map(|&p| {
                     (
-                        grid.distance(p),
+                        grid.distance_above(p, threshold),
                         [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()],
                     )
                 })

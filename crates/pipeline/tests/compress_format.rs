@@ -110,8 +110,23 @@ fn rotation_components(c: &Clip) -> Vec<bool> {
     out
 }
 
+/// Offset of the track table inside the clip record of `bytes` (the file's only clip), from the
+/// documented layout: after the key times, f32 or packed (flag bit 5: a 16-byte header whose bytes
+/// 12 and 13 are the gap and residual widths, then key 0's residual and each further key's gap and
+/// residual).
+fn track_table_offset(bytes: &[u8], n: usize) -> usize {
+    let rec = clip_record_offset(bytes);
+    let flags = u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap());
+    if flags & 32 != 0 {
+        let (gap, res) = (bytes[rec + 44] as usize, bytes[rec + 45] as usize);
+        pad(32 + 16 + (res + (n - 1) * (gap + res)).div_ceil(8))
+    } else {
+        pad(32 + 4 * n)
+    }
+}
+
 /// Offset of the component ranges inside the clip record, from the documented layout.
-fn ranges_offset(c: &Clip) -> usize {
+fn ranges_offset(bytes: &[u8], c: &Clip) -> usize {
     let constants: usize = c
         .tracks()
         .iter()
@@ -126,7 +141,7 @@ fn ranges_offset(c: &Clip) -> usize {
             .sum::<usize>()
         })
         .sum();
-    let mut at = pad(32 + 4 * c.times().len());
+    let mut at = track_table_offset(bytes, c.times().len());
     // Short track table: a u16 name per track, then a byte of kinds per track.
     at = pad(at + 3 * c.tracks().len());
     pad(at + 4 * constants)
@@ -134,17 +149,17 @@ fn ranges_offset(c: &Clip) -> usize {
 
 /// Offset of the segment entries inside the (compact) clip record, from the documented layout:
 /// 4 bytes per rotation component's range, 8 per other component's.
-fn segments_offset(c: &Clip) -> usize {
+fn segments_offset(bytes: &[u8], c: &Clip) -> usize {
     let ranges: usize = rotation_components(c)
         .iter()
         .map(|&r| if r { 4 } else { 8 })
         .sum();
-    pad(ranges_offset(c) + ranges)
+    pad(ranges_offset(bytes, c) + ranges)
 }
 
 /// Offset of the per-segment rotation index table (compact records).
-fn rotation_index_offset(c: &Clip) -> usize {
-    pad(segments_offset(c) + 3 * c.quantized_parts().unwrap().segments.len())
+fn rotation_index_offset(bytes: &[u8], c: &Clip) -> usize {
+    pad(segments_offset(bytes, c) + 3 * c.quantized_parts().unwrap().segments.len())
 }
 
 #[test]
@@ -154,14 +169,17 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     let back = format::read(&bytes).unwrap();
     assert_eq!(back.clips[0], c);
     let rec = clip_record_offset(&bytes);
-    // Flags: bit 2 (compressed), bit 3 (compact) and bit 4 (short track table) set.
+    // Flags: bit 2 (compressed), bit 3 (compact), bit 4 (short track table) and bit 5 (packed
+    // key times) set.
     assert_eq!(
         u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap()),
-        28
+        60
     );
+    // The packed key times decode, by the documented layout, to the clip's times bit for bit.
+    assert_eq!(decode_packed_times(&bytes, rec, c.times().len()), c.times());
     // The short track table: u16 names (the clip's name is string 0, "root" and "spine" follow),
     // then one byte per track: 2 bits of kind per channel (0 bind, 1 constant, 3 quantized).
-    let tt = rec + pad(32 + 4 * c.times().len());
+    let tt = rec + track_table_offset(&bytes, c.times().len());
     let u16_at = |i: usize| u16::from_le_bytes([bytes[i], bytes[i + 1]]);
     assert_eq!((u16_at(tt), u16_at(tt + 2)), (1, 2));
     // root: translation and rotation quantized, scale bind; spine: rotation and scale quantized.
@@ -169,11 +187,14 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     assert_eq!(bytes[tt + 5], 3 << 2 | 3 << 4);
     // The segment entries sit where docs/format.md says: the first one's bit width is its first byte.
     let parts = c.quantized_parts().unwrap();
-    assert_eq!(bytes[rec + segments_offset(&c)], parts.segments[0].bits);
+    assert_eq!(
+        bytes[rec + segments_offset(&bytes, &c)],
+        parts.segments[0].bits
+    );
     // Then the rotation index table: one byte per segment and rotation, each 0-3 or 255.
     let rotations = rotation_components(&c).iter().filter(|&&r| r).count() / 3;
     assert_eq!(rotations, 2);
-    let at = rec + rotation_index_offset(&c);
+    let at = rec + rotation_index_offset(&bytes, &c);
     let table = &bytes[at..at + parts.rotation_index.len()];
     assert_eq!(table, &parts.rotation_index[..]);
     assert_eq!(
@@ -183,7 +204,7 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     assert!(table.iter().all(|&i| i <= 3 || i == 255), "{table:?}");
     // A rotation range is two u16: (min + 1) and extent in units of 2^-15.
     let first_rot = rotation_components(&c).iter().position(|&r| r).unwrap();
-    let ro = rec + ranges_offset(&c) + 8 * first_rot;
+    let ro = rec + ranges_offset(&bytes, &c) + 8 * first_rot;
     let u = |i: usize| f32::from(u16::from_le_bytes([bytes[ro + i], bytes[ro + i + 1]]));
     assert_eq!(u(0) / 32768.0 - 1.0, parts.ranges[first_rot][0]);
     assert_eq!(u(2) / 32768.0, parts.ranges[first_rot][1]);
@@ -194,7 +215,7 @@ fn reader_rejects_a_bad_rotation_index_entry_and_a_compact_flag_alone() {
     let (bytes, c) = compressed_file();
     let rec = clip_record_offset(&bytes);
     let mut b = bytes.clone();
-    b[rec + rotation_index_offset(&c)] = 7;
+    b[rec + rotation_index_offset(&bytes, &c)] = 7;
     fix_crcs(&mut b);
     let e = format::read(&b).unwrap_err();
     assert_eq!(e.section, "CLIP");
@@ -213,12 +234,52 @@ fn reader_rejects_a_bad_rotation_index_entry_and_a_compact_flag_alone() {
     assert!(e.to_string().contains("clip flags"), "{e}");
 }
 
-/// The same file with the clip's track table in the 8-byte form of format 1.4 (u32 name, four kind
-/// bytes per track), built by hand from the documented layouts: the CLIP section must be the last.
+/// The key times of a packed block (clip flag bit 5) at `rec + 32`, decoded as docs/format.md
+/// says: f64 step, u32 first frame, u8 gap and residual widths; then key 0's residual and, per
+/// further key, its gap less one and its residual, least significant bit first; a time is the f32
+/// of `frame * step` (in f64) plus its residual in units of the last place.
+fn decode_packed_times(bytes: &[u8], rec: usize, n: usize) -> Vec<f32> {
+    let at = rec + 32;
+    let step = f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+    let mut frame = u64::from(u32::from_le_bytes(
+        bytes[at + 8..at + 12].try_into().unwrap(),
+    ));
+    let (gap, res) = (bytes[at + 12] as usize, bytes[at + 13] as usize);
+    let data = &bytes[at + 16..];
+    let mut bit = 0;
+    let mut read = |w: usize| -> u64 {
+        let v = (0..w).fold(0u64, |v, b| {
+            v | (u64::from(data[(bit + b) / 8] >> ((bit + b) % 8) & 1) << b)
+        });
+        bit += w;
+        v
+    };
+    (0..n)
+        .map(|k| {
+            if k > 0 {
+                frame += read(gap) + 1;
+            }
+            let r = read(res);
+            let r = if r >> (res - 1) & 1 == 1 {
+                r as i64 - (1i64 << res)
+            } else {
+                r as i64
+            };
+            let grid = (frame as f64 * step) as f32;
+            f32::from_bits((i64::from(grid.to_bits()) + r) as u32)
+        })
+        .collect()
+}
+
+/// The same file in the layout of format 1.4: key times as f32 (the clip's own) and the track
+/// table in the 8-byte form (u32 name, four kind bytes per track), built by hand from the documented
+/// layouts: the CLIP section must be the last.
 fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
     let rec = clip_record_offset(bytes);
-    let tt = rec + pad(32 + 4 * c.times().len());
+    let tt = rec + track_table_offset(bytes, c.times().len());
     let tracks = c.tracks().len();
+    let mut times: Vec<u8> = c.times().iter().flat_map(|t| t.to_le_bytes()).collect();
+    times.resize(pad(32 + times.len()) - 32, 0);
     let mut table = Vec::new();
     for t in 0..tracks {
         let name = u16::from_le_bytes([bytes[tt + 2 * t], bytes[tt + 2 * t + 1]]);
@@ -228,11 +289,12 @@ fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
     }
     table.resize(pad(table.len()), 0);
     let old_len = pad(3 * tracks);
-    let delta = table.len() - old_len;
-    let mut out = bytes[..tt].to_vec();
+    let delta = (32 + times.len() + table.len()) as i64 - (tt + old_len - rec) as i64;
+    let mut out = bytes[..rec + 32].to_vec();
+    out.extend_from_slice(&times);
     out.extend_from_slice(&table);
     out.extend_from_slice(&bytes[tt + old_len..]);
-    let flags = u32::from_le_bytes(out[rec + 4..rec + 8].try_into().unwrap()) & !16;
+    let flags = u32::from_le_bytes(out[rec + 4..rec + 8].try_into().unwrap()) & !(16 | 32);
     out[rec + 4..rec + 8].copy_from_slice(&flags.to_le_bytes());
     out[10..12].copy_from_slice(&4u16.to_le_bytes());
     let file_size = out.len() as u64;
@@ -242,7 +304,7 @@ fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
         let e = 48 + i * 32;
         if &out[e..e + 4] == b"CLIP" {
             let size = u64::from_le_bytes(out[e + 16..e + 24].try_into().unwrap());
-            out[e + 16..e + 24].copy_from_slice(&(size + delta as u64).to_le_bytes());
+            out[e + 16..e + 24].copy_from_slice(&((size as i64 + delta) as u64).to_le_bytes());
         }
     }
     fix_crcs(&mut out);
@@ -250,11 +312,14 @@ fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
 }
 
 #[test]
-fn a_1_4_record_with_the_long_track_table_reads_as_the_same_clip() {
+fn a_1_4_record_with_f32_times_and_the_long_track_table_reads_as_the_same_clip() {
     let (bytes, c) = compressed_file();
     let long = with_long_track_table(&bytes, &c);
-    let tracks = c.tracks().len();
-    assert_eq!(long.len(), bytes.len() + pad(8 * tracks) - pad(3 * tracks));
+    let (n, tracks) = (c.times().len(), c.tracks().len());
+    assert_eq!(
+        long.len() + track_table_offset(&bytes, n) + pad(3 * tracks),
+        bytes.len() + pad(32 + 4 * n) + pad(8 * tracks)
+    );
     let back = format::read(&long).unwrap();
     assert_eq!(back.clips[0], c);
 }
@@ -263,7 +328,7 @@ fn a_1_4_record_with_the_long_track_table_reads_as_the_same_clip() {
 fn reader_rejects_bad_short_track_kinds_and_a_short_flag_alone() {
     let (bytes, c) = compressed_file();
     let rec = clip_record_offset(&bytes);
-    let kinds = rec + pad(32 + 4 * c.times().len()) + 2 * c.tracks().len();
+    let kinds = rec + track_table_offset(&bytes, c.times().len()) + 2 * c.tracks().len();
     // Kind 2 (a plain animated channel) and the two top bits are not valid in a short table.
     for bad in [bytes[kinds] | 2 << 4, bytes[kinds] | 0x40] {
         let mut b = bytes.clone();
@@ -282,9 +347,37 @@ fn reader_rejects_bad_short_track_kinds_and_a_short_flag_alone() {
 }
 
 #[test]
+fn reader_rejects_bad_packed_key_times() {
+    let (bytes, _) = compressed_file();
+    let at = clip_record_offset(&bytes) + 32;
+    let bad = |edit: &dyn Fn(&mut Vec<u8>)| {
+        let mut b = bytes.clone();
+        edit(&mut b);
+        fix_crcs(&mut b);
+        let e = format::read(&b).unwrap_err();
+        assert_eq!(e.section, "CLIP");
+        e.to_string()
+    };
+    // A step that is not a positive number.
+    for step in [f64::NAN, 0.0, -0.05, f64::INFINITY] {
+        let e = bad(&|b| b[at..at + 8].copy_from_slice(&step.to_le_bytes()));
+        assert!(e.contains("step") || e.contains("time"), "{step}: {e}");
+    }
+    // Widths above 32, and a residual width of 0.
+    for (i, w) in [(12, 33u8), (13, 33), (13, 0)] {
+        let e = bad(&|b| b[at + i] = w);
+        assert!(e.contains("bit widths"), "{e}");
+    }
+    // A first frame so far out that the times are no longer finite, or no longer increasing
+    // against nothing: the step raised so far that times overflow f32.
+    let e = bad(&|b| b[at..at + 8].copy_from_slice(&1e300f64.to_le_bytes()));
+    assert!(e.contains("time"), "{e}");
+}
+
+#[test]
 fn reader_rejects_bit_widths_above_24() {
     let (mut bytes, c) = compressed_file();
-    let at = clip_record_offset(&bytes) + segments_offset(&c);
+    let at = clip_record_offset(&bytes) + segments_offset(&bytes, &c);
     bytes[at] = 33;
     fix_crcs(&mut bytes);
     let e = format::read(&bytes).unwrap_err();
@@ -304,7 +397,7 @@ fn reader_rejects_non_finite_ranges() {
     let (mut bytes, c) = compressed_file();
     // The first component is the root's translation: an f32 range even in a compact record.
     assert!(!rotation_components(&c)[0]);
-    let at = clip_record_offset(&bytes) + ranges_offset(&c);
+    let at = clip_record_offset(&bytes) + ranges_offset(&bytes, &c);
     bytes[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
     fix_crcs(&mut bytes);
     let e = format::read(&bytes).unwrap_err();

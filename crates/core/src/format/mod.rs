@@ -13,6 +13,7 @@ mod asset;
 mod error;
 pub mod game;
 mod read;
+mod times;
 mod write;
 
 pub use asset::{

@@ -356,6 +356,8 @@ pub(crate) const CLIP_COMPACT: u32 = 8;
 /// Clip flag (with [`CLIP_QUANTIZED`], since 1.5): short track table, u16 joint names and one byte
 /// of channel kinds per track.
 pub(crate) const CLIP_SHORT_TRACKS: u32 = 16;
+/// Clip flag (with [`CLIP_QUANTIZED`], since 1.5): packed key times (`super::times`).
+pub(crate) const CLIP_PACKED_TIMES: u32 = 32;
 /// Compressed track table kind: quantized animated channel.
 pub(crate) const KIND_QUANTIZED: u8 = 3;
 
@@ -369,8 +371,9 @@ pub fn clip_record_size(clip: &Clip) -> usize {
     b.0.len()
 }
 
-/// Writes a compressed clip record; true when its track table is the short one (every joint name's
-/// string index fits in 16 bits, as it does in any file of fewer than 65,536 strings).
+/// Writes a compressed clip record; true when it uses a 1.5 layout: the short track table (every
+/// joint name's string index fits in 16 bits, as it does in any file of fewer than 65,536 strings)
+/// or packed key times.
 fn compressed_record(
     b: &mut Buf,
     c: &Clip,
@@ -385,6 +388,12 @@ fn compressed_record(
     let short = names.iter().all(|&n| n <= u32::from(u16::MAX));
     if short {
         flags |= CLIP_SHORT_TRACKS;
+    }
+    // Packed key times when they take fewer bytes (after the padding that follows them).
+    let packed = super::times::pack(c.times(), c.sample_rate())
+        .filter(|p| pad_to(32 + p.len()) < pad_to(32 + 4 * c.times().len()));
+    if packed.is_some() {
+        flags |= CLIP_PACKED_TIMES;
     }
     // `Clip::from_quantized` checked that the rotation ranges of such parts have 16-bit forms.
     let compact = !parts.rotation_index.is_empty();
@@ -405,7 +414,15 @@ fn compressed_record(
     b.u32(parts.ranges.len() as u32);
     b.u32(c.tracks().len() as u32);
     b.u32(parts.segment_len);
-    b.f32s(c.times());
+    match &packed {
+        Some(p) => {
+            b.u64(p.step.to_bits());
+            b.u32(p.first);
+            b.bytes(&[p.gap_bits, p.residual_bits, 0, 0]);
+            b.bytes(&p.data);
+        }
+        None => b.f32s(c.times()),
+    }
     align_from(b, start);
     let kind = |c: bool, a: bool| {
         if a {
@@ -487,7 +504,7 @@ fn compressed_record(
         align_from(b, start);
     }
     b.bytes(&parts.data);
-    short
+    short || packed.is_some()
 }
 
 /// The component numbers of a compressed clip's rotations (three per animated rotation).
@@ -508,7 +525,7 @@ fn align_from(b: &mut Buf, start: usize) {
     b.zeros(n);
 }
 
-/// The `CLIP` section, and whether a record has a short track table.
+/// The `CLIP` section, and whether a record uses a 1.5 layout.
 fn clips(list: &[Clip], strings: &mut Strings) -> (Vec<u8>, bool) {
     let mut b = Buf::default();
     b.u32(list.len() as u32);
@@ -522,7 +539,7 @@ fn clips(list: &[Clip], strings: &mut Strings) -> (Vec<u8>, bool) {
     (b.0, short)
 }
 
-/// Writes one clip record; true when it is a compressed record with a short track table.
+/// Writes one clip record; true when it uses a 1.5 layout (short track table, packed key times).
 fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) -> bool {
     if let Some(parts) = c.quantized_parts() {
         return compressed_record(b, c, parts, strings);

@@ -4,8 +4,9 @@ use super::cursor::{f32s_of, Cur, Result, Strs};
 use crate::clip::{Channel, Track};
 use crate::format::error::FormatErrorKind as K;
 use crate::format::write::{
-    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_QUANTIZED, CLIP_SHORT_TRACKS, ENCODING_F32,
-    KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
+    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_PACKED_TIMES, CLIP_QUANTIZED,
+    CLIP_SHORT_TRACKS, ENCODING_F32, KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED,
+    TRACK_RECORD,
 };
 use crate::Clip;
 use glam::{Quat, Vec3};
@@ -80,9 +81,10 @@ pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
     let start = c.pos;
     let name = strs.read(c, "clip name string")?;
     let flags = c.u32()?;
-    let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | CLIP_COMPACT | CLIP_SHORT_TRACKS;
-    // The compact layout and the short track table are variants of the compressed layout.
-    let variants = CLIP_COMPACT | CLIP_SHORT_TRACKS;
+    let variants = CLIP_COMPACT | CLIP_SHORT_TRACKS | CLIP_PACKED_TIMES;
+    let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | variants;
+    // The compact layout, the short track table and packed times are variants of the compressed
+    // layout.
     if flags & !known != 0 || (flags & variants != 0 && flags & CLIP_QUANTIZED == 0) {
         return Err(c.err_at(
             start + 4,
@@ -149,6 +151,41 @@ pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
     .map_err(|e| c.err_at(start, K::Invalid(e.to_string())))
 }
 
+/// A packed key-time block (clip flag bit 5) of `n` keys. Layout: docs/format.md.
+fn packed_times(c: &mut Cur, n: u32) -> Result<Vec<f32>> {
+    use crate::format::times::{data_len, unpack, UnpackError};
+    let at = c.pos;
+    let step = f64::from_bits(c.u64()?);
+    let first = c.u32()?;
+    let [gap_bits, residual_bits, _, _]: [u8; 4] = c.array()?;
+    use crate::format::times::{MAX_BITS, MIN_RESIDUAL_BITS};
+    let widths_ok = gap_bits <= MAX_BITS && (MIN_RESIDUAL_BITS..=MAX_BITS).contains(&residual_bits);
+    if !widths_ok {
+        return Err(c.err_at(
+            at + 12,
+            K::BadValue {
+                what: "packed key time bit widths",
+                value: u64::from(u16::from_le_bytes([gap_bits, residual_bits])),
+            },
+        ));
+    }
+    let n = n as usize;
+    // Every key takes at least one bit (the residual width is at least 1): the bytes present bound
+    // the key count before anything is allocated.
+    let data = c.elements(data_len(n, gap_bits, residual_bits), 1, "packed key times")?;
+    unpack(step, first, gap_bits, residual_bits, data, n).map_err(|e| {
+        c.err_at(
+            at,
+            K::Invalid(match e {
+                UnpackError::Step => "packed key times: step is not a positive number".into(),
+                UnpackError::Width => "packed key times: bit width above 32".into(),
+                UnpackError::Short => "packed key times: data too short".into(),
+                UnpackError::Time => "packed key times: a time is not a finite number >= 0".into(),
+            }),
+        )
+    })
+}
+
 /// The compressed clip record (clip flag bit 2), from its key count on. Layout: docs/format.md.
 pub(super) fn compressed_clip(
     c: &mut Cur,
@@ -175,7 +212,11 @@ pub(super) fn compressed_clip(
             },
         ));
     }
-    let times = c.f32s(key_count.into(), "key times")?;
+    let times = if flags & CLIP_PACKED_TIMES != 0 {
+        packed_times(c, key_count)?
+    } else {
+        c.f32s(key_count.into(), "key times")?
+    };
     c.align()?;
     let short = flags & CLIP_SHORT_TRACKS != 0;
     let track_count = c.check_count(track_count.into(), if short { 3 } else { 8 }, "tracks")?;

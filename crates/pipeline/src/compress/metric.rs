@@ -205,23 +205,6 @@ pub fn measure(
         .collect()
 }
 
-pub(super) fn max_error_of(
-    src: &[Vec<[Vec3; 3]>],
-    rig: &Rig,
-    clip: &Clip,
-    times: &[f32],
-    limit: f32,
-) -> f32 {
-    let mut worst = 0.0f32;
-    runtime_points(rig, clip, times, |k, pts| {
-        for e in point_error(&src[k], pts) {
-            worst = worst.max(e);
-        }
-        worst > limit
-    });
-    worst
-}
-
 /// True when `clip`, sampled by the runtime at `times`, keeps every joint's error within its limit.
 pub(super) fn within(
     src: &[Vec<[Vec3; 3]>],

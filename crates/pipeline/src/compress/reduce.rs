@@ -1,9 +1,9 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
-use super::metric::{max_error_of, point_error, Rig};
+use super::metric::{fk, point_error, Rig};
 use sinew_core::clip::nlerp;
-use sinew_core::glam::{Quat, Vec3};
-use sinew_core::{Channel, Clip, Track, Transform};
+use sinew_core::glam::{Affine3A, Quat, Vec3};
+use sinew_core::{Channel, Clip, ClipBinding, Sampler, Track, Transform};
 
 /// A clip's channel values per key, ready to rebuild clips from.
 #[derive(Clone)]
@@ -172,6 +172,15 @@ pub(super) fn mean_quat(v: &[Quat]) -> Quat {
 }
 
 /// Step 1: channels that one value reproduces become constants or bind.
+///
+/// Channels are tried one at a time, in track order, each against the work as it stands (with the
+/// channels accepted so far); a candidate is accepted when no joint's error exceeds `budget`.
+/// Only the tried joint and its descendants move, and every other joint's error is that of the
+/// work, which is within the budget (accepted before, or the source itself): so a candidate is
+/// measured on that subtree alone, with the work's poses and model transforms at every source time
+/// kept up to date instead of re-sampling whole clips. The tried joint's local pose is the one the
+/// runtime sampler gives for its track alone (lanes are independent), so the decisions are those of
+/// measuring whole clips.
 pub(super) fn simplify_channels(
     work: &mut Work,
     like: &Clip,
@@ -196,28 +205,37 @@ pub(super) fn simplify_channels(
             }
         })
         .collect();
+    let Some(plain) = work.plain(like) else {
+        return;
+    };
+    let mut state = SubtreeState::new(rig, &plain, src_times);
     #[allow(clippy::needless_range_loop)] // `work` is replaced inside the loop
     for i in 0..work.tracks.len() {
+        let Some(joint) = rig.skeleton.find(&work.tracks[i].joint).map(usize::from) else {
+            continue;
+        };
         for ch in 0..3 {
-            let mut candidates: Vec<Work> = Vec::new();
+            let mut candidates: Vec<WTrack> = Vec::new();
             let tr = &work.tracks[i];
             let mut with = |f: &dyn Fn(&mut WTrack)| {
-                let mut w = work.clone();
-                f(&mut w.tracks[i]);
-                candidates.push(w);
+                let mut t = tr.clone();
+                f(&mut t);
+                candidates.push(t);
             };
             let d = defaults[i];
+            // A channel the source already holds constant becomes the bind value when that
+            // reproduces it (sources often key every joint, most at its rest value): a bind
+            // channel costs nothing beyond its track's kind byte, a constant 12 or 16 bytes.
+            // The bind value itself (or the same rotation, negated) changes nothing and needs
+            // no measurement, which on files that key every channel is most of them.
+            let mut exact: Option<WTrack> = None;
             match ch {
-                // A channel the source already holds constant becomes the bind value when that
-                // reproduces it (sources often key every joint, most at its rest value): a bind
-                // channel costs nothing beyond its track's kind byte, a constant 12 or 16 bytes.
-                // The bind value itself (or the same rotation, negated) changes nothing and needs
-                // no measurement, which on files that key every channel is most of them.
                 0 if matches!(tr.t, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(v), Some(d)) = (&tr.t, d) {
                         if *v == d.translation {
-                            work.tracks[i].t = WChan::Bind;
-                            continue;
+                            let mut t = tr.clone();
+                            t.t = WChan::Bind;
+                            exact = Some(t);
                         }
                     }
                     with(&|t: &mut WTrack| t.t = WChan::Bind);
@@ -225,8 +243,9 @@ pub(super) fn simplify_channels(
                 1 if matches!(tr.r, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(q), Some(d)) = (&tr.r, d) {
                         if *q == d.rotation || -*q == d.rotation {
-                            work.tracks[i].r = WChan::Bind;
-                            continue;
+                            let mut t = tr.clone();
+                            t.r = WChan::Bind;
+                            exact = Some(t);
                         }
                     }
                     with(&|t: &mut WTrack| t.r = WChan::Bind);
@@ -234,8 +253,9 @@ pub(super) fn simplify_channels(
                 2 if matches!(tr.s, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(v), Some(d)) = (&tr.s, d) {
                         if *v == d.scale {
-                            work.tracks[i].s = WChan::Bind;
-                            continue;
+                            let mut t = tr.clone();
+                            t.s = WChan::Bind;
+                            exact = Some(t);
                         }
                     }
                     with(&|t: &mut WTrack| t.s = WChan::Bind);
@@ -268,14 +288,143 @@ pub(super) fn simplify_channels(
                     }
                 }
             }
-            for w in candidates {
-                let Some(c) = w.plain(like) else { continue };
-                if max_error_of(src, rig, &c, src_times, budget) <= budget {
-                    *work = w;
+            if let Some(t) = exact {
+                if state.try_track(rig, like, src, src_times, joint, &work.times, &t, None) {
+                    work.tracks[i] = t;
+                }
+                continue;
+            }
+            for t in candidates {
+                if state.try_track(
+                    rig,
+                    like,
+                    src,
+                    src_times,
+                    joint,
+                    &work.times,
+                    &t,
+                    Some(budget),
+                ) {
+                    work.tracks[i] = t;
                     break;
                 }
             }
         }
+    }
+}
+
+/// The work's local poses and model transforms at every source time (time-major, one per rig
+/// joint), as the runtime sampler and [`super::metric`]'s forward kinematics give them, kept up to
+/// date as [`simplify_channels`] replaces tracks.
+struct SubtreeState {
+    local: Vec<Vec<Transform>>,
+    model: Vec<Vec<Affine3A>>,
+    /// Per joint: itself, then its descendants in skeleton order.
+    subtree: Vec<Vec<usize>>,
+    defaults: Vec<Transform>,
+}
+
+impl SubtreeState {
+    fn new(rig: &Rig, plain: &Clip, times: &[f32]) -> SubtreeState {
+        let local = rig.poses(plain, times);
+        let mut m = Vec::new();
+        let model = local
+            .iter()
+            .map(|p| {
+                fk(rig.skeleton.parents(), p, &mut m);
+                m.clone()
+            })
+            .collect();
+        let parents = rig.skeleton.parents();
+        let nj = rig.skeleton.len();
+        let mut subtree: Vec<Vec<usize>> = (0..nj).map(|j| vec![j]).collect();
+        for d in 0..nj {
+            let mut p = parents.get(d).copied().flatten();
+            while let Some(a) = p {
+                let a = usize::from(a);
+                subtree[a].push(d);
+                p = parents.get(a).copied().flatten();
+            }
+        }
+        let defaults = if plain.additive() {
+            vec![Transform::IDENTITY; nj]
+        } else {
+            rig.skeleton.bind_local().to_vec()
+        };
+        SubtreeState {
+            local,
+            model,
+            subtree,
+            defaults,
+        }
+    }
+
+    /// Whether `track` (for `joint`) in place of the work's keeps every error of the joint's
+    /// subtree within `budget` (always, for `None`); if so the state takes it.
+    #[allow(clippy::too_many_arguments)]
+    fn try_track(
+        &mut self,
+        rig: &Rig,
+        like: &Clip,
+        src: &[Vec<[Vec3; 3]>],
+        times: &[f32],
+        joint: usize,
+        key_times: &[f32],
+        track: &WTrack,
+        budget: Option<f32>,
+    ) -> bool {
+        let one = Work {
+            times: key_times.to_vec(),
+            tracks: vec![track.clone()],
+        };
+        let Some(clip) = one.plain(like) else {
+            return false;
+        };
+        let binding = ClipBinding::new(&clip, &rig.skeleton);
+        let mut sampler = Sampler::new();
+        let parents = rig.skeleton.parents();
+        let sub = &self.subtree[joint];
+        let mut pose: Vec<Transform> = Vec::new();
+        let mut new_local = Vec::with_capacity(times.len());
+        // Per time, the subtree's new model transforms (in `sub` order).
+        let mut new_model: Vec<Affine3A> = Vec::with_capacity(times.len() * sub.len());
+        let mut at = vec![0usize; rig.skeleton.len()];
+        for (n, &d) in sub.iter().enumerate() {
+            at[d] = n;
+        }
+        for (k, &t) in times.iter().enumerate() {
+            pose.clear();
+            pose.extend_from_slice(&self.local[k]);
+            pose[joint] = self.defaults[joint];
+            // The output matches the skeleton and the binding was made for it.
+            let _ = sampler.sample(&clip, &binding, &rig.skeleton, t, &mut pose);
+            let base = new_model.len();
+            for (n, &d) in sub.iter().enumerate() {
+                let a = pose[d].to_affine();
+                let m = match parents.get(d).copied().flatten().map(usize::from) {
+                    Some(p) if n > 0 => new_model[base + at[p]] * a,
+                    Some(p) => self.model[k][p] * a,
+                    None => a,
+                };
+                new_model.push(m);
+                if let Some(limit) = budget {
+                    let pts = rig.points[d].map(|x| m.transform_point3(x));
+                    let e = point_error(&src[k][d..=d], std::slice::from_ref(&pts))
+                        .fold(0.0f32, f32::max);
+                    if e > limit {
+                        return false;
+                    }
+                }
+            }
+            new_local.push(pose[joint]);
+        }
+        for (k, l) in new_local.into_iter().enumerate() {
+            self.local[k][joint] = l;
+            for (n, &d) in sub.iter().enumerate() {
+                self.model[k][d] = new_model[k * sub.len() + n];
+            }
+        }
+        true
     }
 }
 

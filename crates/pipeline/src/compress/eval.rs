@@ -71,7 +71,7 @@ pub(super) struct Undo {
     pub(super) comps: Vec<(usize, usize, u32, f32)>,
     pub(super) key_rot: Vec<(usize, usize, Quat)>,
     pub(super) raw: Vec<(usize, usize, Quat)>,
-    pub(super) poses: Vec<(usize, usize, Transform, Affine3A, Affine3A)>,
+    pub(super) poses: Vec<(usize, usize, Affine3A, Affine3A)>,
 }
 
 /// A quantized clip under construction, with its measured error kept up to date while bit widths
@@ -116,10 +116,9 @@ pub(super) struct Eval<'a> {
     pub(super) parents: Vec<Option<usize>>,
     /// Per key, per joint (key-major): the quantized clip's model rotation at that key.
     pub(super) key_rot: Vec<Quat>,
-    /// Per source time, per joint (time-major): local pose and model transform of the quantized
-    /// clip.
-    pub(super) local: Vec<Transform>,
-    /// Per source time, per joint (time-major): `local` as an affine transform.
+    /// Per source time, per joint (time-major): the quantized clip's local pose as an affine
+    /// transform (the pose itself is `base` with the sampled channels, recomputed when needed),
+    /// and its model transform.
     pub(super) local_aff: Vec<Affine3A>,
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
@@ -221,7 +220,6 @@ impl<'a> Eval<'a> {
             ctx,
             layout,
             compensate,
-            local: base.repeat(at.len()),
             local_aff: vec![Affine3A::IDENTITY; nj * at.len()],
             model: vec![Affine3A::IDENTITY; nj * at.len()],
             nj,
@@ -406,16 +404,16 @@ impl<'a> Eval<'a> {
                 self.undo.poses.push((
                     i,
                     d,
-                    self.local[i * self.nj + d],
                     self.local_aff[i * self.nj + d],
                     self.model[i * self.nj + d],
                 ));
             }
             if self.dirty[d] {
-                if let Some(tr) = self.track_of[d] {
-                    self.local[i * self.nj + d] = self.sampled(tr, i, self.local[i * self.nj + d]);
-                }
-                self.local_aff[i * self.nj + d] = self.local[i * self.nj + d].to_affine();
+                let local = match self.track_of[d] {
+                    Some(tr) => self.sampled(tr, i, self.base[d]),
+                    None => self.base[d],
+                };
+                self.local_aff[i * self.nj + d] = local.to_affine();
             }
             let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
             self.model[i * self.nj + d] = pm * self.local_aff[i * self.nj + d];
@@ -599,8 +597,7 @@ impl<'a> Eval<'a> {
         for &(r, k, q) in self.undo.raw.iter().rev() {
             self.raw[r][k] = q;
         }
-        for &(i, d, l, a, m) in self.undo.poses.iter().rev() {
-            self.local[i * self.nj + d] = l;
+        for &(i, d, a, m) in self.undo.poses.iter().rev() {
             self.local_aff[i * self.nj + d] = a;
             self.model[i * self.nj + d] = m;
         }

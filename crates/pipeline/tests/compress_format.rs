@@ -25,7 +25,12 @@ fn skeleton() -> Skeleton {
 }
 
 fn clip() -> Clip {
-    let times: Vec<f32> = (0..40).map(|k| k as f32 / 20.0).collect();
+    clip_of(40)
+}
+
+/// [`clip`] with `keys` keys at 20 Hz.
+fn clip_of(keys: usize) -> Clip {
+    let times: Vec<f32> = (0..keys).map(|k| k as f32 / 20.0).collect();
     let wave = |f: f32| -> Vec<Quat> {
         times
             .iter()
@@ -34,7 +39,7 @@ fn clip() -> Clip {
     };
     Clip::from_curves(
         "sway",
-        times[39],
+        times[keys - 1],
         20.0,
         false,
         false,
@@ -63,7 +68,11 @@ fn clip() -> Clip {
 }
 
 fn compressed_file() -> (Vec<u8>, Clip) {
-    let (c, r) = compress_clip(&clip(), Some(&skeleton()), &CompressOptions::default());
+    compressed_file_of(clip())
+}
+
+fn compressed_file_of(clip: Clip) -> (Vec<u8>, Clip) {
+    let (c, r) = compress_clip(&clip, Some(&skeleton()), &CompressOptions::default());
     assert!(c.is_compressed(), "{r:?}");
     let asset = Asset {
         clips: vec![c.clone()],
@@ -159,7 +168,7 @@ fn segments_offset(bytes: &[u8], c: &Clip) -> usize {
 
 /// Offset of the per-segment rotation index table (compact records).
 fn rotation_index_offset(bytes: &[u8], c: &Clip) -> usize {
-    pad(segments_offset(bytes, c) + 3 * c.quantized_parts().unwrap().segments.len())
+    segments_offset(bytes, c) + packed_segments_len(bytes, c)
 }
 
 #[test]
@@ -169,11 +178,15 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     let back = format::read(&bytes).unwrap();
     assert_eq!(back.clips[0], c);
     let rec = clip_record_offset(&bytes);
-    // Flags: bit 2 (compressed), bit 3 (compact), bit 4 (short track table) and bit 5 (packed
-    // key times) set.
+    // Flags: bit 2 (compressed), bit 3 (compact), bit 4 (short track table), bit 5 (packed key
+    // times), bit 6 (packed segment entries), and bit 7 exactly when every sub-range is the whole
+    // range (this clip is one segment).
+    let parts = c.quantized_parts().unwrap();
+    assert_eq!(parts.segments.len(), parts.ranges.len());
+    let whole = parts.segments.iter().all(|e| (e.min, e.extent) == (0, 255));
     assert_eq!(
         u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap()),
-        60
+        124 | if whole { 128 } else { 0 }
     );
     // The packed key times decode, by the documented layout, to the clip's times bit for bit.
     assert_eq!(decode_packed_times(&bytes, rec, c.times().len()), c.times());
@@ -185,12 +198,14 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     // root: translation and rotation quantized, scale bind; spine: rotation and scale quantized.
     assert_eq!(bytes[tt + 4], 3 | 3 << 2);
     assert_eq!(bytes[tt + 5], 3 << 2 | 3 << 4);
-    // The segment entries sit where docs/format.md says: the first one's bit width is its first byte.
+    // The segment entries sit where docs/format.md says, and decode to the clip's.
     let parts = c.quantized_parts().unwrap();
-    assert_eq!(
-        bytes[rec + segments_offset(&bytes, &c)],
-        parts.segments[0].bits
-    );
+    let entries: Vec<(u8, u8, u8)> = parts
+        .segments
+        .iter()
+        .map(|e| (e.bits, e.min, e.extent))
+        .collect();
+    assert_eq!(packed_segments(&bytes, &c), entries);
     // Then the rotation index table: one byte per segment and rotation, each 0-3 or 255.
     let rotations = rotation_components(&c).iter().filter(|&&r| r).count() / 3;
     assert_eq!(rotations, 2);
@@ -271,10 +286,45 @@ fn decode_packed_times(bytes: &[u8], rec: usize, n: usize) -> Vec<f32> {
         .collect()
 }
 
-/// The same file in the layout of format 1.4: key times as f32 (the clip's own) and the track
-/// table in the 8-byte form (u32 name, four kind bytes per track), built by hand from the documented
-/// layouts: the CLIP section must be the last.
-fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
+/// The segment entries of the (packed, flag bit 6) record as (bits, start, length), decoded as
+/// docs/format.md says: 5-bit widths, least significant bit first, then the starts, then the
+/// lengths, both left out (0 and 255) with flag bit 7.
+fn packed_segments(bytes: &[u8], c: &Clip) -> Vec<(u8, u8, u8)> {
+    let rec = clip_record_offset(bytes);
+    let flags = u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap());
+    assert_ne!(flags & 64, 0, "packed segment entries");
+    let at = rec + segments_offset(bytes, c);
+    let e = c.quantized_parts().unwrap().segments.len();
+    let w = (5 * e).div_ceil(8);
+    (0..e)
+        .map(|i| {
+            let bits = (0..5).fold(0u8, |v, b| {
+                v | ((bytes[at + (5 * i + b) / 8] >> ((5 * i + b) % 8) & 1) << b)
+            });
+            if flags & 128 != 0 {
+                (bits, 0, 255)
+            } else {
+                (bits, bytes[at + w + i], bytes[at + w + e + i])
+            }
+        })
+        .collect()
+}
+
+/// Bytes of the packed segment block, padding included.
+fn packed_segments_len(bytes: &[u8], c: &Clip) -> usize {
+    let rec = clip_record_offset(bytes);
+    let flags = u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap());
+    let e = c.quantized_parts().unwrap().segments.len();
+    let seg = rec + segments_offset(bytes, c);
+    let end = seg + (5 * e).div_ceil(8) + if flags & 128 != 0 { 0 } else { 2 * e };
+    pad(end - rec) - (seg - rec)
+}
+
+/// The same file in the layout of format 1.4, built by hand from the documented layouts: key
+/// times as f32 (the clip's own), the track table in the 8-byte form (u32 name, four kind bytes
+/// per track) and segment entries as three bytes (width, start, length). The CLIP section must be
+/// the last.
+fn to_1_4(bytes: &[u8], c: &Clip) -> Vec<u8> {
     let rec = clip_record_offset(bytes);
     let tt = rec + track_table_offset(bytes, c.times().len());
     let tracks = c.tracks().len();
@@ -288,13 +338,21 @@ fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
         table.extend_from_slice(&[k & 3, (k >> 2) & 3, (k >> 4) & 3, 0]);
     }
     table.resize(pad(table.len()), 0);
-    let old_len = pad(3 * tracks);
-    let delta = (32 + times.len() + table.len()) as i64 - (tt + old_len - rec) as i64;
+    let seg = rec + segments_offset(bytes, c);
+    let mut entries: Vec<u8> = packed_segments(bytes, c)
+        .into_iter()
+        .flat_map(|(b, m, e)| [b, m, e])
+        .collect();
+    entries.resize(pad(entries.len()), 0);
     let mut out = bytes[..rec + 32].to_vec();
     out.extend_from_slice(&times);
     out.extend_from_slice(&table);
-    out.extend_from_slice(&bytes[tt + old_len..]);
-    let flags = u32::from_le_bytes(out[rec + 4..rec + 8].try_into().unwrap()) & !(16 | 32);
+    out.extend_from_slice(&bytes[tt + pad(3 * tracks)..seg]);
+    out.extend_from_slice(&entries);
+    out.extend_from_slice(&bytes[seg + packed_segments_len(bytes, c)..]);
+    let delta = out.len() as i64 - bytes.len() as i64;
+    let flags =
+        u32::from_le_bytes(out[rec + 4..rec + 8].try_into().unwrap()) & !(16 | 32 | 64 | 128);
     out[rec + 4..rec + 8].copy_from_slice(&flags.to_le_bytes());
     out[10..12].copy_from_slice(&4u16.to_le_bytes());
     let file_size = out.len() as u64;
@@ -312,38 +370,42 @@ fn with_long_track_table(bytes: &[u8], c: &Clip) -> Vec<u8> {
 }
 
 #[test]
-fn a_1_4_record_with_f32_times_and_the_long_track_table_reads_as_the_same_clip() {
-    let (bytes, c) = compressed_file();
-    let long = with_long_track_table(&bytes, &c);
-    let (n, tracks) = (c.times().len(), c.tracks().len());
-    assert_eq!(
-        long.len() + track_table_offset(&bytes, n) + pad(3 * tracks),
-        bytes.len() + pad(32 + 4 * n) + pad(8 * tracks)
+fn a_clip_of_several_segments_stores_its_sub_ranges() {
+    // 400 keys: segments of 16 or 32 keys, so sub-ranges narrower than the clip's.
+    let (bytes, c) = compressed_file_of(clip_of(400));
+    let parts = c.quantized_parts().unwrap();
+    assert!(
+        parts.segments.len() >= 13 * parts.ranges.len(),
+        "{}",
+        parts.segments.len()
     );
-    let back = format::read(&long).unwrap();
-    assert_eq!(back.clips[0], c);
+    assert!(parts.segments.iter().any(|e| (e.min, e.extent) != (0, 255)));
+    let rec = clip_record_offset(&bytes);
+    let flags = u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap());
+    assert_eq!(flags & (64 | 128), 64);
+    let entries: Vec<(u8, u8, u8)> = parts
+        .segments
+        .iter()
+        .map(|e| (e.bits, e.min, e.extent))
+        .collect();
+    assert_eq!(packed_segments(&bytes, &c), entries);
+    assert_eq!(format::read(&bytes).unwrap().clips[0], c);
+    // And in the 1.4 layout, three bytes per entry.
+    assert_eq!(format::read(&to_1_4(&bytes, &c)).unwrap().clips[0], c);
 }
 
 #[test]
-fn reader_rejects_bad_short_track_kinds_and_a_short_flag_alone() {
+fn a_1_4_record_reads_as_the_same_clip() {
     let (bytes, c) = compressed_file();
-    let rec = clip_record_offset(&bytes);
-    let kinds = rec + track_table_offset(&bytes, c.times().len()) + 2 * c.tracks().len();
-    // Kind 2 (a plain animated channel) and the two top bits are not valid in a short table.
-    for bad in [bytes[kinds] | 2 << 4, bytes[kinds] | 0x40] {
-        let mut b = bytes.clone();
-        b[kinds] = bad;
-        fix_crcs(&mut b);
-        let e = format::read(&b).unwrap_err();
-        assert!(e.to_string().contains("channel kind"), "{e}");
-        assert_eq!(e.offset, Some(kinds as u64), "{e}");
-    }
-    // Bit 4 without bit 2 is not a layout.
-    let mut b = bytes;
-    b[rec + 4..rec + 8].copy_from_slice(&16u32.to_le_bytes());
-    fix_crcs(&mut b);
-    let e = format::read(&b).unwrap_err();
-    assert!(e.to_string().contains("clip flags"), "{e}");
+    let old = to_1_4(&bytes, &c);
+    assert!(old.len() > bytes.len(), "{} vs {}", old.len(), bytes.len());
+    let rec = clip_record_offset(&old);
+    assert_eq!(
+        u32::from_le_bytes(old[rec + 4..rec + 8].try_into().unwrap()),
+        12
+    );
+    let back = format::read(&old).unwrap();
+    assert_eq!(back.clips[0], c);
 }
 
 #[test]
@@ -378,7 +440,8 @@ fn reader_rejects_bad_packed_key_times() {
 fn reader_rejects_bit_widths_above_24() {
     let (mut bytes, c) = compressed_file();
     let at = clip_record_offset(&bytes) + segments_offset(&bytes, &c);
-    bytes[at] = 33;
+    // The first entry's width is the low 5 bits of the first byte: 31.
+    bytes[at] |= 31;
     fix_crcs(&mut bytes);
     let e = format::read(&bytes).unwrap_err();
     // Either the data length no longer matches or the width is refused: never a panic or a clip.

@@ -358,6 +358,12 @@ pub(crate) const CLIP_COMPACT: u32 = 8;
 pub(crate) const CLIP_SHORT_TRACKS: u32 = 16;
 /// Clip flag (with [`CLIP_QUANTIZED`], since 1.5): packed key times (`super::times`).
 pub(crate) const CLIP_PACKED_TIMES: u32 = 32;
+/// Clip flag (with [`CLIP_QUANTIZED`], since 1.5): segment entries as 5-bit widths, then the
+/// sub-range starts, then their lengths (instead of three bytes per entry).
+pub(crate) const CLIP_PACKED_SEGMENTS: u32 = 64;
+/// Clip flag (with [`CLIP_PACKED_SEGMENTS`], since 1.5): every sub-range is the whole clip range
+/// (start 0, length 255) and none is stored.
+pub(crate) const CLIP_WHOLE_RANGES: u32 = 128;
 /// Compressed track table kind: quantized animated channel.
 pub(crate) const KIND_QUANTIZED: u8 = 3;
 
@@ -371,9 +377,9 @@ pub fn clip_record_size(clip: &Clip) -> usize {
     b.0.len()
 }
 
-/// Writes a compressed clip record; true when it uses a 1.5 layout: the short track table (every
-/// joint name's string index fits in 16 bits, as it does in any file of fewer than 65,536 strings)
-/// or packed key times.
+/// Writes a compressed clip record, in the 1.5 layout (so: true): packed segment entries, the
+/// short track table when every joint name's string index fits in 16 bits (as it does in any file
+/// of fewer than 65,536 strings), packed key times when they are smaller.
 fn compressed_record(
     b: &mut Buf,
     c: &Clip,
@@ -394,6 +400,14 @@ fn compressed_record(
         .filter(|p| pad_to(32 + p.len()) < pad_to(32 + 4 * c.times().len()));
     if packed.is_some() {
         flags |= CLIP_PACKED_TIMES;
+    }
+    // Segment entries: bit widths in 5 bits each (every width is at most 24), and the
+    // sub-ranges left out when every one is the whole clip range (0 and 255: a clip of one
+    // segment, or components without extent).
+    flags |= CLIP_PACKED_SEGMENTS;
+    let whole = parts.segments.iter().all(|e| e.min == 0 && e.extent == 255);
+    if whole {
+        flags |= CLIP_WHOLE_RANGES;
     }
     // `Clip::from_quantized` checked that the rotation ranges of such parts have 16-bit forms.
     let compact = !parts.rotation_index.is_empty();
@@ -495,8 +509,23 @@ fn compressed_record(
         }
     }
     align_from(b, start);
-    for s in &parts.segments {
-        b.bytes(&[s.bits, s.min, s.extent]);
+    let mut widths = vec![0u8; (parts.segments.len() * 5).div_ceil(8)];
+    for (i, e) in parts.segments.iter().enumerate() {
+        for bit in 0..5 {
+            if e.bits >> bit & 1 != 0 {
+                let at = i * 5 + bit;
+                widths[at / 8] |= 1 << (at % 8);
+            }
+        }
+    }
+    b.bytes(&widths);
+    if !whole {
+        for e in &parts.segments {
+            b.bytes(&[e.min]);
+        }
+        for e in &parts.segments {
+            b.bytes(&[e.extent]);
+        }
     }
     align_from(b, start);
     if compact {
@@ -504,7 +533,7 @@ fn compressed_record(
         align_from(b, start);
     }
     b.bytes(&parts.data);
-    short || packed.is_some()
+    true
 }
 
 /// The component numbers of a compressed clip's rotations (three per animated rotation).
@@ -539,7 +568,8 @@ fn clips(list: &[Clip], strings: &mut Strings) -> (Vec<u8>, bool) {
     (b.0, short)
 }
 
-/// Writes one clip record; true when it uses a 1.5 layout (short track table, packed key times).
+/// Writes one clip record; true when it uses a 1.5 layout (every compressed record does: packed
+/// segment entries).
 fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) -> bool {
     if let Some(parts) = c.quantized_parts() {
         return compressed_record(b, c, parts, strings);

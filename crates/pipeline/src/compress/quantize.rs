@@ -117,6 +117,9 @@ pub(super) fn sub_range(range: [f32; 2], keys: &[f32]) -> SegmentComponent {
     let [lo, ext] = range;
     let mut e = SegmentComponent::default();
     if ext <= 0.0 || keys.is_empty() {
+        // Nothing to narrow: the whole (empty) range, which a record of whole ranges leaves out
+        // (it decodes to the same value as any other sub-range of an empty range).
+        e.extent = 255;
         return e;
     }
     let smin = keys.iter().copied().fold(f32::MAX, f32::min);

@@ -4,9 +4,9 @@ use super::cursor::{f32s_of, Cur, Result, Strs};
 use crate::clip::{Channel, Track};
 use crate::format::error::FormatErrorKind as K;
 use crate::format::write::{
-    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_PACKED_TIMES, CLIP_QUANTIZED,
-    CLIP_SHORT_TRACKS, ENCODING_F32, KIND_ANIMATED, KIND_BIND, KIND_CONSTANT, KIND_QUANTIZED,
-    TRACK_RECORD,
+    CLIP_ADDITIVE, CLIP_COMPACT, CLIP_LOOPING, CLIP_PACKED_SEGMENTS, CLIP_PACKED_TIMES,
+    CLIP_QUANTIZED, CLIP_SHORT_TRACKS, CLIP_WHOLE_RANGES, ENCODING_F32, KIND_ANIMATED, KIND_BIND,
+    KIND_CONSTANT, KIND_QUANTIZED, TRACK_RECORD,
 };
 use crate::Clip;
 use glam::{Quat, Vec3};
@@ -81,11 +81,18 @@ pub(super) fn clip(c: &mut Cur, strs: &Strs, record: usize) -> Result<Clip> {
     let start = c.pos;
     let name = strs.read(c, "clip name string")?;
     let flags = c.u32()?;
-    let variants = CLIP_COMPACT | CLIP_SHORT_TRACKS | CLIP_PACKED_TIMES;
+    let variants = CLIP_COMPACT
+        | CLIP_SHORT_TRACKS
+        | CLIP_PACKED_TIMES
+        | CLIP_PACKED_SEGMENTS
+        | CLIP_WHOLE_RANGES;
     let known = CLIP_LOOPING | CLIP_ADDITIVE | CLIP_QUANTIZED | variants;
-    // The compact layout, the short track table and packed times are variants of the compressed
-    // layout.
-    if flags & !known != 0 || (flags & variants != 0 && flags & CLIP_QUANTIZED == 0) {
+    // The compact layout, the short track table, packed times and packed segment entries are
+    // variants of the compressed layout; whole ranges a variant of packed entries.
+    if flags & !known != 0
+        || (flags & variants != 0 && flags & CLIP_QUANTIZED == 0)
+        || (flags & CLIP_WHOLE_RANGES != 0 && flags & CLIP_PACKED_SEGMENTS == 0)
+    {
         return Err(c.err_at(
             start + 4,
             K::BadValue {
@@ -388,19 +395,45 @@ pub(super) fn compressed_clip(
     };
     c.align()?;
     let seg_count = u64::from(key_count).div_ceil(u64::from(segment_len));
-    let seg_bytes = c.elements(
-        seg_count.saturating_mul(components.into()),
-        3,
-        "segment component entries",
-    )?;
-    let segments = seg_bytes
-        .chunks_exact(3)
-        .map(|b| SegmentComponent {
-            bits: b[0],
-            min: b[1],
-            extent: b[2],
-        })
-        .collect();
+    let entries = seg_count.saturating_mul(components.into());
+    let segments: Vec<SegmentComponent> = if flags & CLIP_PACKED_SEGMENTS != 0 {
+        // 5-bit widths, then (unless whole ranges) the starts, then the lengths.
+        let widths = c.elements(
+            entries.saturating_mul(5).div_ceil(8),
+            1,
+            "segment bit widths",
+        )?;
+        let (mins, extents): (&[u8], &[u8]) = if flags & CLIP_WHOLE_RANGES != 0 {
+            (&[], &[])
+        } else {
+            let m = c.elements(entries, 1, "segment range starts")?;
+            let e = c.elements(entries, 1, "segment range lengths")?;
+            (m, e)
+        };
+        // `entries` is at most 8/5 of the width bytes present, so it fits in memory.
+        (0..entries as usize)
+            .map(|i| {
+                let bits = (0..5).fold(0u8, |v, b| {
+                    let at = i * 5 + b;
+                    v | (widths.get(at / 8).map_or(0, |x| x >> (at % 8) & 1) << b)
+                });
+                SegmentComponent {
+                    bits,
+                    min: mins.get(i).copied().unwrap_or(0),
+                    extent: extents.get(i).copied().unwrap_or(255),
+                }
+            })
+            .collect()
+    } else {
+        c.elements(entries, 3, "segment component entries")?
+            .chunks_exact(3)
+            .map(|b| SegmentComponent {
+                bits: b[0],
+                min: b[1],
+                extent: b[2],
+            })
+            .collect()
+    };
     c.align()?;
     let rotation_index = if compact {
         let v = c
@@ -419,7 +452,7 @@ pub(super) fn compressed_clip(
     // (a shared rotation index takes no bits in the records).
     let comps = components as usize;
     let mut needed = 0u64;
-    for (s, seg) in seg_bytes.chunks(comps.max(1) * 3).enumerate() {
+    for (s, seg) in segments.chunks(comps.max(1)).enumerate() {
         let stored = if compact {
             rotation_index
                 .iter()
@@ -430,8 +463,7 @@ pub(super) fn compressed_clip(
         } else {
             rotations.len()
         };
-        let bits: u64 =
-            seg.chunks_exact(3).map(|b| u64::from(b[0])).sum::<u64>() + 2 * stored as u64;
+        let bits: u64 = seg.iter().map(|e| u64::from(e.bits)).sum::<u64>() + 2 * stored as u64;
         let first = s as u64 * u64::from(segment_len);
         let keys = u64::from(segment_len).min(u64::from(key_count).saturating_sub(first));
         needed = needed.saturating_add((bits * keys).div_ceil(8));

@@ -239,6 +239,23 @@ const PEER_CLIPS: [(&str, &str, usize); 2] = [
     ("gltf/Fox.glb", "Run", 5_457),
 ];
 
+/// Clip `i` of `plain` (compiled from `scene`) compressed at the peers' setting, which must
+/// compress and keep the 0.001 tolerance measured against the scene's own curves: its record size.
+fn peers_record_size(file: &str, scene: &Scene, plain: &Asset, i: usize) -> usize {
+    let clip = &plain.clips[i];
+    let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &CompressOptions::peers());
+    assert!(c.is_compressed(), "{file} {:?}: {r:?}", clip.name());
+    let err = max_error(
+        plain.skeleton.as_ref(),
+        &scene.clips[i],
+        clip.times(),
+        &c,
+        0.1,
+    );
+    assert!(err <= 0.001, "{file} {:?}: error {err}", clip.name());
+    clip_record_size(&c)
+}
+
 #[test]
 fn peers_settings_beat_the_reference_sizes_of_ozz_and_acl() {
     let mut checked = 0;
@@ -251,17 +268,7 @@ fn peers_settings_beat_the_reference_sizes_of_ozz_and_acl() {
         let plain = compile(&scene).unwrap();
         let mut total = 0;
         for (i, clip) in plain.clips.iter().enumerate() {
-            let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &CompressOptions::peers());
-            assert!(c.is_compressed(), "{file} {r:?}");
-            let err = max_error(
-                plain.skeleton.as_ref(),
-                &scene.clips[i],
-                clip.times(),
-                &c,
-                0.1,
-            );
-            assert!(err <= 0.001, "{file} {:?}: error {err}", clip.name());
-            let size = clip_record_size(&c);
+            let size = peers_record_size(file, &scene, &plain, i);
             for (_, name, ozz) in PEER_CLIPS
                 .iter()
                 .filter(|p| p.0 == file && p.1 == clip.name())
@@ -319,18 +326,7 @@ fn small_and_near_static_clips_are_smaller_than_ozz_and_acl() {
             .iter()
             .position(|c| c.name() == name)
             .unwrap_or_else(|| panic!("{file}: no clip {name}"));
-        let clip = &plain.clips[i];
-        let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &CompressOptions::peers());
-        assert!(c.is_compressed(), "{file} {name}: {r:?}");
-        let err = max_error(
-            plain.skeleton.as_ref(),
-            &scene.clips[i],
-            clip.times(),
-            &c,
-            0.1,
-        );
-        assert!(err <= 0.001, "{file} {name}: error {err}");
-        let size = clip_record_size(&c);
+        let size = peers_record_size(file, &scene, &plain, i);
         assert!(
             size < ozz && size < acl,
             "{file} {name}: {size} B, ozz {ozz} B, ACL {acl} B"

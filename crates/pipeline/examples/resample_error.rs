@@ -7,6 +7,9 @@
 //! sampler), and measured against the source clip.
 //!
 //! `cargo run --release -p sinew-pipeline --example resample_error -- FILE RATE [RATE...] [--distance D]`
+//!
+//! With `WORST=1` in the environment it also prints, on stderr, where the worst error is (key,
+//! time, joint) and the six joints with the largest errors.
 
 #![allow(clippy::unwrap_used)]
 

@@ -22,9 +22,9 @@ pub const VERSION_MINOR_GAME: u16 = 3;
 /// Minor version of files that hold compact compressed clips (clip flag bit 3, added in 1.4:
 /// rotation indices shared per segment, 16-bit rotation ranges), which older readers reject.
 pub const VERSION_MINOR_COMPACT: u16 = 4;
-/// Minor version of files that hold compressed clips with a short track table (clip flag bit 4,
-/// added in 1.5: u16 joint names and one byte of channel kinds per track), which older readers
-/// reject.
+/// Minor version of files that hold compressed clips in the layouts added in 1.5 (clip flag bits
+/// 4-7: short track tables, packed key times, packed segment entries), which older readers reject.
+/// sinew writes every compressed clip so.
 pub const VERSION_MINOR_SHORT_TRACKS: u16 = 5;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;

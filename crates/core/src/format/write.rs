@@ -2,8 +2,8 @@
 
 use super::asset::{
     validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
-    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_COMPACT,
-    VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME, VERSION_MINOR_SHORT_TRACKS,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_GAME,
+    VERSION_MINOR_SHORT_TRACKS,
 };
 use super::error::FormatError;
 use crate::clip::Channel;
@@ -11,8 +11,8 @@ use crate::compressed::compact_range_units;
 use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
-/// Encodes an asset as a `.sinew` file, version 1.1 (1.2 with compressed clips, 1.3 with game data,
-/// 1.4 with compact compressed clips, 1.5 with short track tables).
+/// Encodes an asset as a `.sinew` file, version 1.1 (1.3 with game data, 1.5 with compressed clips,
+/// whose records use 1.5's layouts).
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -30,11 +30,8 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
     if !asset.meshes.is_empty() {
         sections.push((Tag::MESHES, meshes(asset, &mut strings)));
     }
-    let mut short_tracks = false;
     if !asset.clips.is_empty() {
-        let (body, short) = clips(&asset.clips, &mut strings);
-        short_tracks = short;
-        sections.push((Tag::CLIPS, body));
+        sections.push((Tag::CLIPS, clips(&asset.clips, &mut strings)));
     }
     if asset.source_vertex.iter().any(Option::is_some) {
         sections.push((Tag::SOURCE_VERTICES, source_vertices(asset)));
@@ -46,18 +43,11 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
         sections.push((Tag::GAME, game(&asset.game, &mut strings)));
     }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
-    let compact = asset.clips.iter().any(|c| {
-        c.quantized_parts()
-            .is_some_and(|p| !p.rotation_index.is_empty())
-    });
-    let minor = if short_tracks {
+    // Every compressed record is written in the 1.5 layout (packed segment entries at least).
+    let minor = if asset.clips.iter().any(Clip::is_compressed) {
         VERSION_MINOR_SHORT_TRACKS
-    } else if compact {
-        VERSION_MINOR_COMPACT
     } else if !asset.game.is_empty() {
         VERSION_MINOR_GAME
-    } else if asset.clips.iter().any(Clip::is_compressed) {
-        VERSION_MINOR_COMPRESSED
     } else {
         VERSION_MINOR
     };
@@ -377,15 +367,15 @@ pub fn clip_record_size(clip: &Clip) -> usize {
     b.0.len()
 }
 
-/// Writes a compressed clip record, in the 1.5 layout (so: true): packed segment entries, the
-/// short track table when every joint name's string index fits in 16 bits (as it does in any file
-/// of fewer than 65,536 strings), packed key times when they are smaller.
+/// Writes a compressed clip record in the 1.5 layout: packed segment entries, the short track
+/// table when every joint name's string index fits in 16 bits (as it does in any file of fewer
+/// than 65,536 strings), packed key times when they are smaller.
 fn compressed_record(
     b: &mut Buf,
     c: &Clip,
     parts: &crate::compressed::QuantizedParts,
     strings: &mut Strings,
-) -> bool {
+) {
     let start = b.0.len();
     let mut flags = CLIP_QUANTIZED;
     // Strings in the order the record names them: the clip, then its tracks.
@@ -533,7 +523,6 @@ fn compressed_record(
         align_from(b, start);
     }
     b.bytes(&parts.data);
-    true
 }
 
 /// The component numbers of a compressed clip's rotations (three per animated rotation).
@@ -554,25 +543,22 @@ fn align_from(b: &mut Buf, start: usize) {
     b.zeros(n);
 }
 
-/// The `CLIP` section, and whether a record uses a 1.5 layout.
-fn clips(list: &[Clip], strings: &mut Strings) -> (Vec<u8>, bool) {
+fn clips(list: &[Clip], strings: &mut Strings) -> Vec<u8> {
     let mut b = Buf::default();
     b.u32(list.len() as u32);
     b.u32(TRACK_RECORD as u32);
     b.zeros(8);
-    let mut short = false;
     for c in list {
         b.align();
-        short |= clip_record(&mut b, c, strings);
+        clip_record(&mut b, c, strings);
     }
-    (b.0, short)
+    b.0
 }
 
-/// Writes one clip record; true when it uses a 1.5 layout (every compressed record does: packed
-/// segment entries).
-fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) -> bool {
+fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) {
     if let Some(parts) = c.quantized_parts() {
-        return compressed_record(b, c, parts, strings);
+        compressed_record(b, c, parts, strings);
+        return;
     }
     let start = b.0.len();
     {
@@ -606,7 +592,6 @@ fn clip_record(b: &mut Buf, c: &Clip, strings: &mut Strings) -> bool {
         align_from(b, start);
         b.f32s(c.frames());
     }
-    false
 }
 
 /// SRCV: `u32 entry_count; 12 zero bytes;` then per entry, 16-aligned:

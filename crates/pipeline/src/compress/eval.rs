@@ -1,6 +1,6 @@
 //! Incremental error evaluation of a quantisation while its bit widths change.
 
-use super::metric::{exceeds, joint_limits, Rig};
+use super::metric::{exceeds, joint_limits, subtrees, Rig};
 use super::quantize::{locate, raw_rotation, Kind, Layout, Quant};
 use super::reduce::{WChan, Work};
 use sinew_core::clip::{nlerp, normalize_rotation};
@@ -173,15 +173,7 @@ impl<'a> Eval<'a> {
                 first[comp.track][comp.kind as usize] = Some(c);
             }
         }
-        let mut subtree: Vec<Vec<usize>> = (0..nj).map(|j| vec![j]).collect();
-        for d in 0..nj {
-            let mut p = parents.get(d).copied().flatten();
-            while let Some(a) = p {
-                let a = usize::from(a);
-                subtree[a].push(d);
-                p = parents.get(a).copied().flatten();
-            }
-        }
+        let subtree = subtrees(parents);
         let mut base: Vec<Transform> = if ctx.like.additive() {
             vec![Transform::IDENTITY; nj]
         } else {

@@ -77,6 +77,20 @@ pub(super) fn clip_extent(clip: &Clip) -> f32 {
     }
 }
 
+/// Per joint: itself, then its descendants in skeleton order (parents come before children).
+pub(super) fn subtrees(parents: &[Option<u16>]) -> Vec<Vec<usize>> {
+    let mut subtree: Vec<Vec<usize>> = (0..parents.len()).map(|j| vec![j]).collect();
+    for d in 0..parents.len() {
+        let mut p = parents[d];
+        while let Some(a) = p {
+            let a = usize::from(a);
+            subtree[a].push(d);
+            p = parents.get(a).copied().flatten();
+        }
+    }
+    subtree
+}
+
 impl Rig {
     pub(super) fn new(clip: &Clip, skeleton: Option<&Skeleton>, distance: f32) -> Option<Rig> {
         let (mut names, mut parents, mut bind) = match skeleton {

@@ -1,6 +1,6 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
-use super::metric::{fk, point_error, Rig};
+use super::metric::{fk, point_error, subtrees, Rig};
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
 use sinew_core::{Channel, Clip, ClipBinding, Sampler, Track, Transform};
@@ -337,15 +337,7 @@ impl SubtreeState {
             .collect();
         let parents = rig.skeleton.parents();
         let nj = rig.skeleton.len();
-        let mut subtree: Vec<Vec<usize>> = (0..nj).map(|j| vec![j]).collect();
-        for d in 0..nj {
-            let mut p = parents.get(d).copied().flatten();
-            while let Some(a) = p {
-                let a = usize::from(a);
-                subtree[a].push(d);
-                p = parents.get(a).copied().flatten();
-            }
-        }
+        let subtree = subtrees(parents);
         let defaults = if plain.additive() {
             vec![Transform::IDENTITY; nj]
         } else {

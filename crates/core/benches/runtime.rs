@@ -14,7 +14,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{
     local_to_model, local_to_model_and_palette, skin, skin_with, skinning_palette, Animator,
-    BlendBuffers, ClipBinding, Layer, NormalTransform, Sampler, Transform,
+    BlendBuffers, ClipBinding, Layer, NormalTransform, PoseBlocks, Sampler, Transform,
 };
 use std::hint::black_box;
 use std::sync::Arc;
@@ -113,6 +113,29 @@ fn frame<M: Measurement>(c: &mut Criterion<M>, clock: &str) {
                 )
                 .unwrap();
             black_box(&locals);
+        })
+    });
+    // The same blend with the layers kept as blocks, as ozz's `BlendingJob` takes them (SoA in,
+    // SoA out): sampled once into `PoseBlocks`, resolved into `PoseBlocks`.
+    let mut blocks_a = PoseBlocks::new(n);
+    let mut blocks_b = PoseBlocks::new(n);
+    sa.sample_layer_blocks(&walk, &bind_a, 0.3, &mut blocks_a)
+        .unwrap();
+    sb.sample_layer_blocks(&wave, &bind_b, 0.3, &mut blocks_b)
+        .unwrap();
+    let bind_blocks = PoseBlocks::from_transforms(skeleton.bind_local());
+    let mut blended = PoseBlocks::new(n);
+    g.bench_function("blend_two_masked_blocks", |bench| {
+        bench.iter(|| {
+            buffers.reset();
+            buffers
+                .accumulate_blocks(black_box(&blocks_a), 1.0, Some(&lower))
+                .unwrap();
+            buffers
+                .accumulate_blocks(black_box(&blocks_b), 1.0, Some(&upper))
+                .unwrap();
+            buffers.resolve_blocks(&bind_blocks, &mut blended).unwrap();
+            black_box(&blended);
         })
     });
     g.bench_function("local_to_model_and_palette", |bench| {

@@ -46,6 +46,7 @@
 //! Nothing here allocates: all state lives in the [`BlendBuffers`].
 
 use crate::cpu::multiversion;
+use crate::pose_blocks::PoseBlocks;
 use crate::skeleton::JointIndex;
 use crate::soa;
 use crate::Transform;
@@ -159,9 +160,7 @@ impl BlendBuffers {
             joints,
             accum: vec![Vec4::ZERO; blocks * soa::ACCUM],
             driven: vec![0; blocks],
-            every: (0..blocks)
-                .map(|b| 0b1111u8 >> (4 * b + 4).saturating_sub(joints).min(4))
-                .collect(),
+            every: crate::pose_blocks::every_lane(joints),
             fresh: false,
         }
     }
@@ -199,7 +198,8 @@ impl BlendBuffers {
         layer.check(n)?;
         // A layer that drives every joint in order (a whole-body clip) drives every lane.
         if layer.driven.len() == n && n <= 1 << 16 && in_order(layer.driven) {
-            accumulate_blocks(&mut self.accum, &self.every, layer, self.fresh);
+            let (pose, weight, mask) = (layer.pose, layer.weight, layer.mask);
+            accumulate_transforms(&mut self.accum, &self.every, pose, weight, mask, self.fresh);
             self.fresh = false;
             return Ok(());
         }
@@ -235,7 +235,15 @@ impl BlendBuffers {
             *d = lanes;
         }
         if by_blocks {
-            accumulate_blocks(&mut self.accum, &self.driven, layer, self.fresh);
+            let (pose, weight, mask) = (layer.pose, layer.weight, layer.mask);
+            accumulate_transforms(
+                &mut self.accum,
+                &self.driven,
+                pose,
+                weight,
+                mask,
+                self.fresh,
+            );
             self.fresh = false;
             Ok(())
         } else {
@@ -268,6 +276,69 @@ impl BlendBuffers {
         } else {
             resolve_blocks(&self.accum, bind, out);
         }
+        Ok(())
+    }
+
+    /// [`BlendBuffers::accumulate`] for a layer kept as blocks: adds the joints `pose` holds (a
+    /// sampled layer: the joints its clip drives), at `weight` times `mask[j]` when a mask (one
+    /// factor per joint) is given. The same arithmetic and the same bits as the [`Layer`] of the
+    /// same transforms, driven joints, weight and mask, without transposing the pose.
+    pub fn accumulate_blocks(
+        &mut self,
+        pose: &PoseBlocks,
+        weight: f32,
+        mask: Option<&[f32]>,
+    ) -> Result<(), BlendError> {
+        let n = self.joints;
+        if pose.joint_count() != n {
+            return Err(BlendError::Length {
+                what: "pose",
+                expected: n,
+                got: pose.joint_count(),
+            });
+        }
+        if let Some(m) = mask {
+            if m.len() != n {
+                return Err(BlendError::Length {
+                    what: "mask",
+                    expected: n,
+                    got: m.len(),
+                });
+            }
+        }
+        let (accum, fresh) = (&mut self.accum, self.fresh);
+        accumulate_pose_blocks(accum, &pose.held, &pose.blocks, weight, mask, fresh);
+        self.fresh = false;
+        Ok(())
+    }
+
+    /// [`BlendBuffers::resolve`] into blocks: `bind` is the bind pose ([`PoseBlocks::from_transforms`]
+    /// of [`Skeleton::bind_local`](crate::Skeleton::bind_local), made once), `out` receives every
+    /// joint (all held).
+    pub fn resolve_blocks(
+        &self,
+        bind: &PoseBlocks,
+        out: &mut PoseBlocks,
+    ) -> Result<(), BlendError> {
+        let n = self.joints;
+        for (what, got) in [
+            ("bind pose", bind.joint_count()),
+            ("output", out.joint_count()),
+        ] {
+            if got != n {
+                return Err(BlendError::Length {
+                    what,
+                    expected: n,
+                    got,
+                });
+            }
+        }
+        if self.fresh {
+            out.blocks.copy_from_slice(&bind.blocks);
+        } else {
+            resolve_pose_blocks(&self.accum, &bind.blocks, &mut out.blocks);
+        }
+        out.held.copy_from_slice(&self.every);
         Ok(())
     }
 
@@ -308,28 +379,86 @@ fn in_order(driven: &[JointIndex]) -> bool {
     differ.iter().all(|&d| d == 0) && rest.iter().zip(want).all(|(&j, w)| j == w)
 }
 
-multiversion! {
-    /// Adds `layer` to `accum` a block at a time; `driven` holds the lanes it drives per block (each
-    /// joint once, all inside the skeleton). `fresh`: `accum` is to be read as zeros (every block
-    /// is written).
-    fn accumulate_blocks(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) -> ()
-        => accumulate_blocks_generic;
+/// Where a layer's blocks come from: transforms, transposed four at a time, or a [`PoseBlocks`]
+/// read as it is. (A trait rather than an enum: each source gets its own copy of the loop.)
+trait BlockSource: Copy {
+    /// Block `b` (lanes past the end of the pose are the identity).
+    fn block(self, b: usize) -> soa::Block;
 }
 
-#[inline(always)]
-fn accumulate_blocks_generic(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>, fresh: bool) {
-    if fresh {
-        add_blocks::<true>(accum, driven, layer);
-    } else {
-        add_blocks::<false>(accum, driven, layer);
+impl BlockSource for &[Transform] {
+    #[inline(always)]
+    fn block(self, b: usize) -> soa::Block {
+        match self.get(4 * b..4 * b + 4) {
+            Some(four) => soa::block_of(four),
+            None => soa::block_of(self.get(4 * b..).unwrap_or(&[])),
+        }
     }
 }
 
-/// [`accumulate_blocks`] with `FRESH` = `fresh`. Adding to a zero read from memory and adding to a
+impl BlockSource for &[Vec4] {
+    #[inline(always)]
+    fn block(self, b: usize) -> soa::Block {
+        self.get(b * soa::COMPONENTS..(b + 1) * soa::COMPONENTS)
+            .and_then(|v| <&soa::Block>::try_from(v).ok())
+            .copied()
+            .unwrap_or([Vec4::ZERO; soa::COMPONENTS])
+    }
+}
+
+multiversion! {
+    /// Adds a layer of transforms (`pose` at `weight`, times `mask` per joint) to `accum` a block
+    /// at a time; `driven` holds the lanes it drives per block (each joint once, all inside the
+    /// skeleton). `fresh`: `accum` is to be read as zeros (every block is written).
+    fn accumulate_transforms(
+        accum: &mut [Vec4],
+        driven: &[u8],
+        pose: &[Transform],
+        weight: f32,
+        mask: Option<&[f32]>,
+        fresh: bool,
+    ) -> () => accumulate_generic;
+}
+
+multiversion! {
+    /// [`accumulate_transforms`] for a pose kept as blocks ([`PoseBlocks`]).
+    fn accumulate_pose_blocks(
+        accum: &mut [Vec4],
+        driven: &[u8],
+        pose: &[Vec4],
+        weight: f32,
+        mask: Option<&[f32]>,
+        fresh: bool,
+    ) -> () => accumulate_generic;
+}
+
+#[inline(always)]
+fn accumulate_generic<S: BlockSource>(
+    accum: &mut [Vec4],
+    driven: &[u8],
+    source: S,
+    weight: f32,
+    mask: Option<&[f32]>,
+    fresh: bool,
+) {
+    if fresh {
+        add_blocks::<true, S>(accum, driven, source, weight, mask);
+    } else {
+        add_blocks::<false, S>(accum, driven, source, weight, mask);
+    }
+}
+
+/// [`accumulate_transforms`] with `FRESH` = `fresh`. Adding to a zero read from memory and adding to a
 /// zero in a register are the same operation: a fresh buffer gives the bits a cleared one gives.
 #[inline(always)]
-fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Layer<'_>) {
-    let weight = Vec4::splat(layer.weight);
+fn add_blocks<const FRESH: bool, S: BlockSource>(
+    accum: &mut [Vec4],
+    driven: &[u8],
+    source: S,
+    weight: f32,
+    mask: Option<&[f32]>,
+) {
+    let weight = Vec4::splat(weight);
     let blocks = accum.chunks_exact_mut(soa::ACCUM).zip(driven);
     for (b, (a, &d)) in blocks.enumerate() {
         let Ok(a) = <&mut [Vec4; soa::ACCUM]>::try_from(a) else {
@@ -343,7 +472,7 @@ fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Laye
         }
         let first = 4 * b;
         // `layer.weight * mask[j]` per lane, as the per-joint code multiplies them.
-        let w = match layer.mask {
+        let w = match mask {
             Some(m) => match m.get(first..first + 4) {
                 Some(m4) => weight * Vec4::from_slice(m4),
                 None => {
@@ -366,10 +495,7 @@ fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Laye
         }
         let mut sums = if FRESH { [Vec4::ZERO; soa::ACCUM] } else { *a };
         let w = soa::select(on, w, Vec4::ZERO);
-        let block = match layer.pose.get(first..first + 4) {
-            Some(four) => soa::block_of(four),
-            None => soa::block_of(layer.pose.get(first..).unwrap_or(&[])),
-        };
+        let block = source.block(b);
         // (Lanes left out are zeroed so that a value the layer does not provide is never read.)
         let p = if on.all() {
             block
@@ -394,7 +520,7 @@ fn add_blocks<const FRESH: bool>(accum: &mut [Vec4], driven: &[u8], layer: &Laye
 
 /// Adds `layer` joint by joint, in the order it lists them, into lane `j % 4` of block `j / 4`;
 /// stops with an error at a joint outside the skeleton (`joints`). Scalar operations, the same as
-/// the lanes' in [`accumulate_blocks`].
+/// the lanes' in [`accumulate_transforms`].
 fn accumulate_joints(
     accum: &mut [Vec4],
     joints: usize,
@@ -462,6 +588,17 @@ fn resolve_blocks_generic(accum: &[Vec4], bind: &[Transform], out: &mut [Transfo
         soa::resolve(a, &bind_block, &mut o);
         soa::write_transforms(&o, 0b1111, o4);
     }
+}
+
+multiversion! {
+    /// Resolves every block of `accum` into `out`, blocks of the bind pose `bind`.
+    fn resolve_pose_blocks(accum: &[Vec4], bind: &[Vec4], out: &mut [Vec4]) -> ()
+        => resolve_pose_blocks_generic;
+}
+
+#[inline(always)]
+fn resolve_pose_blocks_generic(accum: &[Vec4], bind: &[Vec4], out: &mut [Vec4]) {
+    soa::resolve(accum, bind, out);
 }
 
 /// Applies an additive layer (a pose of differences, see the module docs) on top of `base`, in place.
@@ -656,6 +793,106 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn block_layers_give_the_transform_layers_bits() {
+        let mut seed = 0x1234_5678u32;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed >> 8) as f32 / (1u32 << 23) as f32 - 1.0
+        };
+        let bits = |t: &[Transform]| -> Vec<u32> {
+            t.iter()
+                .flat_map(|t| {
+                    let mut v = t.translation.to_array().to_vec();
+                    v.extend(t.rotation.to_array());
+                    v.extend(t.scale.to_array());
+                    v
+                })
+                .map(f32::to_bits)
+                .collect()
+        };
+        for n in [1, 4, 5, 23, 40] {
+            let mut pose = || -> Vec<Transform> {
+                (0..n)
+                    .map(|_| {
+                        Transform::new(
+                            Vec3::new(next(), next(), next()) * 10.0,
+                            Quat::from_xyzw(next(), next(), next(), next()),
+                            Vec3::new(next(), next(), next()) + 1.5,
+                        )
+                    })
+                    .collect()
+            };
+            let (bind, p1, p2) = (pose(), pose(), pose());
+            let levels = [0.0, 0.25, 1.0, 0.7, 0.5, 1.0, f32::NAN, 0.0];
+            let m1: Vec<f32> = (0..n).map(|j| levels[j % 8]).collect();
+            let m2: Vec<f32> = (0..n).map(|j| levels[(j * 3 + 1) % 8]).collect();
+            let all: Vec<JointIndex> = (0..n as JointIndex).collect();
+            let some: Vec<JointIndex> = (0..n as JointIndex).filter(|j| j % 3 != 1).collect();
+            let (b1, b2) = (
+                PoseBlocks::from_joints(&p1, &all),
+                PoseBlocks::from_joints(&p2, &some),
+            );
+            let bind_blocks = PoseBlocks::from_transforms(&bind);
+            for weight in [1.0, 0.6, 2.0] {
+                let layers = [
+                    Layer::new(&p1, &all).with_mask(&m1),
+                    Layer::new(&p2, &some).with_mask(&m2).with_weight(weight),
+                ];
+                let mut want = vec![Transform::IDENTITY; n];
+                let mut b = BlendBuffers::new(n);
+                b.blend(&bind, &layers, &[], &mut want).unwrap();
+                // Both layers as blocks, resolved into blocks and into transforms.
+                let mut out = PoseBlocks::new(n);
+                for base in [false, true] {
+                    let run = |b: &mut BlendBuffers, out: &mut PoseBlocks| {
+                        b.reset();
+                        b.accumulate_blocks(&b1, 1.0, Some(&m1))?;
+                        b.accumulate_blocks(&b2, weight, Some(&m2))?;
+                        b.resolve_blocks(&bind_blocks, out)
+                    };
+                    if base {
+                        crate::cpu::baseline(|| run(&mut b, &mut out)).unwrap();
+                    } else {
+                        run(&mut b, &mut out).unwrap();
+                    }
+                    assert!((0..n).all(|j| out.holds(j)));
+                    let mut got = vec![Transform::IDENTITY; n];
+                    assert!(out.write_transforms(&mut got));
+                    assert_eq!(bits(&got), bits(&want), "{n} joints, weight {weight}");
+                    b.resolve(&bind, &mut got).unwrap();
+                    assert_eq!(bits(&got), bits(&want), "{n} joints, weight {weight}");
+                }
+                // One layer of each kind, in either order.
+                b.reset();
+                b.accumulate(&layers[0]).unwrap();
+                b.accumulate_blocks(&b2, weight, Some(&m2)).unwrap();
+                let mut got = vec![Transform::IDENTITY; n];
+                b.resolve(&bind, &mut got).unwrap();
+                assert_eq!(bits(&got), bits(&want));
+                b.reset();
+                b.accumulate_blocks(&b1, 1.0, Some(&m1)).unwrap();
+                b.accumulate(&layers[1]).unwrap();
+                b.resolve(&bind, &mut got).unwrap();
+                assert_eq!(bits(&got), bits(&want));
+            }
+            // Nothing accumulated: the bind pose; wrong sizes are refused.
+            let mut b = BlendBuffers::new(n);
+            b.reset();
+            let mut out = PoseBlocks::new(n);
+            b.resolve_blocks(&bind_blocks, &mut out).unwrap();
+            let mut got = vec![Transform::IDENTITY; n];
+            assert!(out.write_transforms(&mut got));
+            assert_eq!(bits(&got), bits(&bind));
+            let short = PoseBlocks::new(n + 1);
+            assert!(b.accumulate_blocks(&short, 1.0, None).is_err());
+            assert!(b.accumulate_blocks(&b1, 1.0, Some(&m1[1..])).is_err());
+            assert!(b.resolve_blocks(&short, &mut out).is_err());
         }
     }
 

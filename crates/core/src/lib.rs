@@ -10,6 +10,8 @@
 //! - [`Clip`]: immutable key data shared by all characters; [`ClipBinding`] maps its tracks to joints by
 //!   name once; [`Sampler`] keeps a cursor per playing clip.
 //! - blending of weighted, masked and additive layers, and an animator holding per-character state;
+//!   [`PoseBlocks`] keeps a pose four joints per block for callers that sample and blend step by step
+//!   without transposing poses (the animator's own layout);
 //! - local-to-model transforms, the skinning palette, and linear blend skinning of a [`Mesh`].
 
 pub mod animator;
@@ -22,6 +24,7 @@ mod skin_avx;
 pub use cpu::set_baseline_only;
 pub mod format;
 pub mod mesh;
+pub mod pose_blocks;
 pub mod skeleton;
 pub mod skinning;
 mod soa;
@@ -35,6 +38,7 @@ pub use clip::{
 pub use mesh::{
     projected_pixels, select_lod, Lod, Mesh, Submesh, DEFAULT_PIXEL_ERROR, MAX_INFLUENCES,
 };
+pub use pose_blocks::PoseBlocks;
 pub use skeleton::{JointDesc, JointIndex, Skeleton, SkeletonError};
 pub use skinning::{
     local_to_model, local_to_model_and_palette, skin, skin_lod, skin_with, skinning_palette,

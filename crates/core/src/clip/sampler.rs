@@ -3,6 +3,7 @@
 use super::binding::ClipBinding;
 use super::data::{Clip, ClipError};
 use super::key_cache::KeyCache;
+use crate::pose_blocks::PoseBlocks;
 use crate::skeleton::Skeleton;
 use crate::soa::{self, PlanBlock};
 use crate::Transform;
@@ -139,6 +140,39 @@ impl Sampler {
                 out.get_mut(pb.block * 4..).unwrap_or_default(),
             );
         })
+    }
+
+    /// [`Sampler::sample_layer`] into blocks: the same values, bit for bit, written four joints per
+    /// block into `out` (a pose of the binding's skeleton), which then holds exactly the joints the
+    /// clip drives. For [`BlendBuffers::accumulate_blocks`](crate::BlendBuffers::accumulate_blocks).
+    pub fn sample_layer_blocks(
+        &mut self,
+        clip: &Clip,
+        binding: &ClipBinding,
+        t: f32,
+        out: &mut PoseBlocks,
+    ) -> Result<(), ClipError> {
+        if binding.skeleton_len != out.joint_count() {
+            return Err(ClipError::OutputLength {
+                expected: binding.skeleton_len,
+                got: out.joint_count(),
+            });
+        }
+        out.held.fill(0);
+        let (blocks, held) = (&mut out.blocks, &mut out.held);
+        self.sample_each(
+            clip,
+            binding,
+            t,
+            soa::Rotations::Interpolated,
+            |pb, block| {
+                let range = pb.block * soa::COMPONENTS..(pb.block + 1) * soa::COMPONENTS;
+                if let (Some(o), Some(h)) = (blocks.get_mut(range), held.get_mut(pb.block)) {
+                    o.copy_from_slice(block);
+                    *h = pb.driven;
+                }
+            },
+        )
     }
 
     /// Samples the clip at playback time `t` into `out`, one block of [`soa::COMPONENTS`] vectors per

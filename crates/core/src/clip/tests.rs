@@ -685,3 +685,67 @@ fn a_segment_shared_rotation_index_decodes_as_the_same_index_stored_per_key() {
         pk.data.len()
     );
 }
+
+#[test]
+fn layer_blocks_hold_the_driven_joints_with_the_sample_layer_bits() {
+    // Six joints over two blocks; the clip drives joints 0, 2 and 5 (the last block partly).
+    let joints: Vec<JointDesc> = (0..6)
+        .map(|j| JointDesc {
+            name: format!("j{j}"),
+            parent: (j > 0).then(|| format!("j{}", j - 1)),
+            bind_local: Transform::from_translation(Vec3::new(j as f32, 1.0, 0.0)),
+            inverse_bind: None,
+        })
+        .collect();
+    let six = Skeleton::from_unordered(joints).unwrap().0;
+    let times = vec![0.0, 0.4, 1.0];
+    let tracks = [0usize, 2, 5]
+        .iter()
+        .map(|&j| {
+            let f = j as f32 + 1.0;
+            TrackCurves {
+                joint: format!("j{j}"),
+                translation: Curve::new(
+                    times.clone(),
+                    times.iter().map(|&t| Vec3::new(t * f, -t, 0.5)).collect(),
+                ),
+                rotation: Curve::new(
+                    times.clone(),
+                    times
+                        .iter()
+                        .map(|&t| Quat::from_rotation_x(t * f) * Quat::from_rotation_z(0.3 * t))
+                        .collect(),
+                ),
+                ..Default::default()
+            }
+        })
+        .collect();
+    let plain = Clip::from_curves("six", 1.0, 30.0, true, false, tracks).unwrap();
+    let cases = [
+        (plain, six.clone()),
+        (compressed(true, false), skeleton()),
+        (compressed(false, false), skeleton()),
+    ];
+    for (clip, sk) in cases {
+        let binding = ClipBinding::new(&clip, &sk);
+        let (mut a, mut b) = (Sampler::new(), Sampler::new());
+        let mut blocks = crate::PoseBlocks::new(sk.len());
+        for t in [0.0, 0.1, 0.4, 0.55, 0.99, 1.3] {
+            let mut want = sk.bind_local().to_vec();
+            a.sample_layer(&clip, &binding, &sk, t, &mut want).unwrap();
+            b.sample_layer_blocks(&clip, &binding, t, &mut blocks)
+                .unwrap();
+            let held: Vec<crate::JointIndex> = (0..sk.len() as crate::JointIndex)
+                .filter(|&j| blocks.holds(j as usize))
+                .collect();
+            assert_eq!(held, binding.driven(), "{} at {t}", clip.name());
+            let mut got = sk.bind_local().to_vec();
+            assert!(blocks.write_transforms(&mut got));
+            assert_eq!(bits(&got), bits(&want), "{} at {t}", clip.name());
+        }
+        let mut wrong = crate::PoseBlocks::new(sk.len() + 1);
+        assert!(b
+            .sample_layer_blocks(&clip, &binding, 0.0, &mut wrong)
+            .is_err());
+    }
+}

@@ -1,0 +1,61 @@
+//! Times the clip encoder alone, per clip, on one thread: what docs/performance.md compares with
+//! ACL's `acl_compressor` compression time (issue 17, goal 1).
+//!
+//! `cargo run --release -p sinew-pipeline --example compress_time -- RUNS FILE...` (corpus-relative
+//! paths or paths on disk). Every clip of each file is compressed RUNS times at the peers' settings
+//! (0.001 units at 0.1 units) inside a one-thread rayon pool; prints per clip the median and fastest
+//! time in milliseconds, the joints x keys and the compressed bytes.
+
+#![allow(clippy::unwrap_used)]
+
+use sinew_pipeline::compile::compile;
+use sinew_pipeline::compress::{compress_clip, CompressOptions};
+use std::time::Instant;
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let runs: usize = args.next().and_then(|r| r.parse().ok()).unwrap_or(5).max(1);
+    let files: Vec<String> = args.collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let options = CompressOptions::peers();
+    println!("| file | clip | joints x keys | bytes | median ms | fastest ms |");
+    println!("|---|---|---|---:|---:|---:|");
+    for file in files {
+        let path = sinew_testdata::corpus_file(&file)
+            .filter(|p| p.exists())
+            .unwrap_or_else(|| std::path::PathBuf::from(&file));
+        let scene = match sinew_import::import_path(&path, &Default::default()) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("{file}: {e}");
+                continue;
+            }
+        };
+        let asset = compile(&scene).unwrap();
+        for clip in &asset.clips {
+            let mut times = Vec::with_capacity(runs);
+            let mut report = None;
+            for _ in 0..runs {
+                let start = Instant::now();
+                let (_, r) =
+                    pool.install(|| compress_clip(clip, asset.skeleton.as_ref(), &options));
+                times.push(start.elapsed().as_secs_f64() * 1000.0);
+                report = Some(r);
+            }
+            times.sort_by(f64::total_cmp);
+            let r = report.unwrap();
+            println!(
+                "| {file} | {} | {} x {} | {} | {:.2} | {:.2} |",
+                r.clip,
+                r.animated_joints,
+                r.samples,
+                r.compressed_bytes,
+                times[times.len() / 2],
+                times[0]
+            );
+        }
+    }
+}

@@ -1,7 +1,7 @@
 //! Incremental error evaluation of a quantisation while its bit widths change.
 
 use super::metric::{exceeds, joint_limits, subtrees, Rig};
-use super::quantize::{locate, raw_rotation, Kind, Layout, Quant};
+use super::quantize::{locate, raw_rotation, Layout, Quant};
 use super::reduce::{WChan, Work};
 use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::compressed::three_without;
@@ -64,16 +64,6 @@ impl<'a> Ctx<'a> {
     }
 }
 
-/// Undo records of one tentative change of [`Eval`].
-#[derive(Default)]
-pub(super) struct Undo {
-    pub(super) bits: Option<(usize, u8)>,
-    pub(super) comps: Vec<(usize, usize, u32, f32)>,
-    pub(super) key_rot: Vec<(usize, usize, Quat)>,
-    pub(super) raw: Vec<(usize, usize, Quat)>,
-    pub(super) poses: Vec<(usize, usize, Affine3A, Affine3A)>,
-}
-
 /// A quantized clip under construction, with its measured error kept up to date while bit widths
 /// change one at a time.
 ///
@@ -84,7 +74,7 @@ pub(super) struct Undo {
 /// positions, through its own bone), and far-reaching joints need fewer bits.
 ///
 /// Changing a component of one segment requantizes only that segment's keys of the joint's subtree,
-/// and re-measures only the source times that read those keys.
+/// and re-measures only the source times that read those keys ([`super::trial::Trial`]).
 pub(super) struct Eval<'a> {
     pub(super) ctx: &'a Ctx<'a>,
     pub(super) layout: &'a Layout,
@@ -100,6 +90,9 @@ pub(super) struct Eval<'a> {
     pub(super) first: Vec<[Option<usize>; 3]>,
     /// Per joint: itself, then its descendants in skeleton order.
     pub(super) subtree: Vec<Vec<usize>>,
+    /// Per joint `j`, per position `n > 0` in `subtree[j]`: the position of that joint's parent
+    /// (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
+    pub(super) subtree_parent: Vec<Vec<usize>>,
     /// Per joint: its local transform where the clip does not animate it.
     pub(super) base: Vec<Transform>,
     /// Per segment, per component: bit width, and the quantization parameters it gives.
@@ -123,12 +116,9 @@ pub(super) struct Eval<'a> {
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
     pub(super) seg_times: Vec<Vec<usize>>,
-    pub(super) undo: Undo,
-    /// Per joint, during a change: its stored values changed / its model transforms changed.
+    /// Per joint, while building: its stored values changed / its model transforms changed.
     pub(super) dirty: Vec<bool>,
     pub(super) moved: Vec<bool>,
-    /// Scratch of [`Eval::set`]: per source time and joint of the change, measured already.
-    pub(super) seen: Vec<bool>,
 }
 
 impl<'a> Eval<'a> {
@@ -174,6 +164,31 @@ impl<'a> Eval<'a> {
             }
         }
         let subtree = subtrees(parents);
+        // Per joint `j`, per joint `d`: `d`'s position in `subtree[j]`, or `u32::MAX`.
+        let mut subtree_at = vec![u32::MAX; nj * nj];
+        for (j, list) in subtree.iter().enumerate() {
+            for (n, &d) in list.iter().enumerate() {
+                if let Some(slot) = subtree_at.get_mut(j * nj + d) {
+                    *slot = n as u32;
+                }
+            }
+        }
+        let subtree_parent: Vec<Vec<usize>> = subtree
+            .iter()
+            .enumerate()
+            .map(|(j, list)| {
+                list.iter()
+                    .enumerate()
+                    .map(|(n, &d)| {
+                        let p = parents.get(d).copied().flatten().map(usize::from);
+                        match p.and_then(|p| subtree_at.get(j * nj + p)) {
+                            Some(&np) if n > 0 && np != u32::MAX => np as usize,
+                            _ => usize::MAX,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
         let mut base: Vec<Transform> = if ctx.like.additive() {
             vec![Transform::IDENTITY; nj]
         } else {
@@ -226,6 +241,7 @@ impl<'a> Eval<'a> {
             track_of,
             first,
             subtree,
+            subtree_parent,
             base,
             params: (0..bits.len())
                 .map(|i| layout.params(i / nc.max(1), i % nc.max(1), bits[i]))
@@ -236,8 +252,6 @@ impl<'a> Eval<'a> {
             raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
-            undo: Undo::default(),
-            seen: Vec::new(),
         };
         let all: Vec<usize> = (0..nj).collect();
         e.dirty.fill(true);
@@ -250,16 +264,16 @@ impl<'a> Eval<'a> {
             let (k0, k1, a) = e.at[i];
             let need = if a != 0.0 { k0.max(k1) } else { k0 } + 1;
             while next < need.min(n) {
-                e.requantize_key(next / seg_len, next, &all, None, false);
+                e.requantize_key(next / seg_len, next, &all);
                 next += 1;
             }
-            e.resample(i, &all, false);
+            e.resample(i, &all);
             if check && (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j])) {
                 return (e, false);
             }
         }
         while next < n {
-            e.requantize_key(next / seg_len, next, &all, None, false);
+            e.requantize_key(next / seg_len, next, &all);
             next += 1;
         }
         (e, true)
@@ -280,102 +294,62 @@ impl<'a> Eval<'a> {
         self.parents.get(j).copied().flatten()
     }
 
-    /// Quantizes key `k` of segment `s` for `joints` (a joint's subtree, or all joints, in
-    /// skeleton order). `changed`: the component (of the first joint) whose bit width changed, so
-    /// that only what depends on it is redone; `None` redoes everything. Sets `dirty`, and records
-    /// undo information when `record`.
-    /// Keys of a segment are done in order; `dirty` is only ever set here, the caller clears it.
-    pub(super) fn requantize_key(
-        &mut self,
-        s: usize,
-        k: usize,
-        joints: &[usize],
-        changed: Option<usize>,
-        record: bool,
-    ) {
+    /// Quantizes key `k` of segment `s` for `joints` (all joints, in skeleton order), every
+    /// component, and sets `dirty`. Keys of a segment are done in order; `dirty` is only ever set
+    /// here, the caller clears it. (A change of one component is worked out by
+    /// [`super::trial::Trial`].)
+    pub(super) fn requantize_key(&mut self, s: usize, k: usize, joints: &[usize]) {
         let nc = self.layout.comps.len();
-        if let Some(c) = changed.filter(|&c| self.layout.comps[c].kind != Kind::R) {
-            // A translation or scale component: nothing else depends on it.
-            if let Some(&j) = joints.first() {
-                let v = self.layout.comps[c].vals[k];
-                self.dirty[j] |= self.store(s, c, k, v, record, nc);
-            }
-            return;
-        }
-        for (n, &d) in joints.iter().enumerate() {
-            if changed.is_some() && n > 0 && !self.compensate {
-                break;
-            }
+        for &d in joints {
             let pr = self
                 .parent(d)
                 .map_or(Quat::IDENTITY, |p| self.key_rot[k * self.nj + p]);
             let mut rot = self.base[d].rotation;
-            let mut rot_changed = false;
             if let Some(tr) = self.track_of[d] {
                 let [ft, fr, fs] = self.first[tr];
-                if changed.is_none() {
-                    for c0 in [ft, fs].into_iter().flatten() {
-                        for c in c0..c0 + 3 {
-                            let v = self.layout.comps[c].vals[k];
-                            self.dirty[d] |= self.store(s, c, k, v, record, nc);
-                        }
+                for c0 in [ft, fs].into_iter().flatten() {
+                    for c in c0..c0 + 3 {
+                        let v = self.layout.comps[c].vals[k];
+                        self.dirty[d] |= self.store(s, c, k, v, nc);
                     }
                 }
                 if let Some(c0) = fr {
-                    let comp = &self.layout.comps[c0];
-                    let ri = comp.rot;
+                    let ri = self.layout.comps[c0].rot;
                     let index = self.layout.index[ri][k];
-                    let vals = match self.key_src[k] {
-                        Some(i) if self.compensate => {
-                            let target =
-                                (pr.inverse() * self.ctx.src_rot[i * self.nj + d]).normalize();
-                            three_without(target, index)
-                        }
-                        _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
-                    };
+                    let vals = self.rotation_values(d, c0, k, pr);
                     for (a, v) in vals.into_iter().enumerate() {
-                        rot_changed |= self.store(s, c0 + a, k, v, record, nc);
+                        self.dirty[d] |= self.store(s, c0 + a, k, v, nc);
                     }
-                    self.dirty[d] |= rot_changed;
                     let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
                     let raw = raw_rotation(index, q);
-                    if record {
-                        self.undo.raw.push((ri, k, self.raw[ri][k]));
-                    }
                     self.raw[ri][k] = raw;
                     rot = normalize_rotation(raw);
                 }
-            }
-            if changed.is_some() && n == 0 && !rot_changed {
-                // The joint's rotation at this key did not change: nothing below it does.
-                break;
-            }
-            if record {
-                self.undo
-                    .key_rot
-                    .push((k, d, self.key_rot[k * self.nj + d]));
             }
             self.key_rot[k * self.nj + d] = pr * rot;
         }
     }
 
+    /// The three stored components of joint `d`'s rotation (first component `c0`) at key `k`,
+    /// under its parent's model rotation `pr`: with chain compensation (at a source key), the
+    /// local rotation that gives the joint's source model rotation; otherwise the source values.
+    pub(super) fn rotation_values(&self, d: usize, c0: usize, k: usize, pr: Quat) -> [f32; 3] {
+        let index = self.layout.index[self.layout.comps[c0].rot][k];
+        match self.key_src[k] {
+            Some(i) if self.compensate => {
+                let target = (pr.inverse() * self.ctx.src_rot[i * self.nj + d]).normalize();
+                three_without(target, index)
+            }
+            _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
+        }
+    }
+
     /// Quantizes `v` as component `c` of key `k` (in segment `s`); returns whether the stored
     /// value changed.
-    pub(super) fn store(
-        &mut self,
-        s: usize,
-        c: usize,
-        k: usize,
-        v: f32,
-        record: bool,
-        nc: usize,
-    ) -> bool {
+    pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) -> bool {
         let (q, x) = self.params[s * nc + c].quantize(v);
         let changed = q != self.qi[c][k] || x.to_bits() != self.dec[c][k].to_bits();
         if changed {
-            if record {
-                self.undo.comps.push((c, k, self.qi[c][k], self.dec[c][k]));
-            }
             self.qi[c][k] = q;
             self.dec[c][k] = x;
         }
@@ -384,21 +358,13 @@ impl<'a> Eval<'a> {
 
     /// Recomputes the local poses (of dirty joints) and model transforms (of joints that moved:
     /// dirty, or below a dirty joint) of `joints` at source time `i`; sets `moved`.
-    pub(super) fn resample(&mut self, i: usize, joints: &[usize], record: bool) {
+    pub(super) fn resample(&mut self, i: usize, joints: &[usize]) {
         for (n, &d) in joints.iter().enumerate() {
             let parent = self.parent(d);
             let below = n > 0 && parent.is_some_and(|p| self.moved[p]);
             self.moved[d] = self.dirty[d] || below;
             if !self.moved[d] {
                 continue;
-            }
-            if record {
-                self.undo.poses.push((
-                    i,
-                    d,
-                    self.local_aff[i * self.nj + d],
-                    self.model[i * self.nj + d],
-                ));
             }
             if self.dirty[d] {
                 let local = match self.track_of[d] {
@@ -412,45 +378,57 @@ impl<'a> Eval<'a> {
         }
     }
 
-    pub(super) fn vec3(&self, c: usize, k: usize) -> Vec3 {
-        Vec3::new(self.dec[c][k], self.dec[c + 1][k], self.dec[c + 2][k])
-    }
-
-    pub(super) fn quat(&self, c: usize, k: usize) -> Quat {
-        self.raw[self.layout.comps[c].rot][k]
-    }
-
     /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
     /// the sampler computes it.
-    pub(super) fn sampled(&self, tr: usize, i: usize, mut base: Transform) -> Transform {
+    pub(super) fn sampled(&self, tr: usize, i: usize, base: Transform) -> Transform {
+        self.sampled_with(tr, i, base, |c, k| self.dec[c][k], |ri, k| self.raw[ri][k])
+    }
+
+    /// [`Eval::sampled`] with the decoded values (component, key) and decoded rotations (rotation
+    /// number, key) read through `dec` and `raw`.
+    #[inline(always)]
+    pub(super) fn sampled_with(
+        &self,
+        tr: usize,
+        i: usize,
+        mut base: Transform,
+        dec: impl Fn(usize, usize) -> f32,
+        raw: impl Fn(usize, usize) -> Quat,
+    ) -> Transform {
         let (k0, k1, a) = self.at[i];
         let [ft, fr, fs] = self.first[tr];
+        let vec3 = |c: usize, k: usize| Vec3::new(dec(c, k), dec(c + 1, k), dec(c + 2, k));
+        let quat = |c: usize, k: usize| raw(self.layout.comps[c].rot, k);
         if a == 0.0 {
             if let Some(c) = ft {
-                base.translation = self.vec3(c, k0);
+                base.translation = vec3(c, k0);
             }
             if let Some(c) = fs {
-                base.scale = self.vec3(c, k0);
+                base.scale = vec3(c, k0);
             }
             if let Some(c) = fr {
-                base.rotation = normalize_rotation(self.quat(c, k0));
+                base.rotation = normalize_rotation(quat(c, k0));
             }
         } else {
             if let Some(c) = ft {
-                base.translation = self.vec3(c, k0).lerp(self.vec3(c, k1), a);
+                base.translation = vec3(c, k0).lerp(vec3(c, k1), a);
             }
             if let Some(c) = fs {
-                base.scale = self.vec3(c, k0).lerp(self.vec3(c, k1), a);
+                base.scale = vec3(c, k0).lerp(vec3(c, k1), a);
             }
             if let Some(c) = fr {
-                base.rotation = nlerp(self.quat(c, k0), self.quat(c, k1), a);
+                base.rotation = nlerp(quat(c, k0), quat(c, k1), a);
             }
         }
         base
     }
 
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
-        let m = &self.model[i * self.nj + j];
+        self.error_at(i, j, &self.model[i * self.nj + j])
+    }
+
+    /// Joint `j`'s error at source time `i` with model transform `m`.
+    pub(super) fn error_at(&self, i: usize, j: usize, m: &Affine3A) -> f32 {
         let p = &self.ctx.rig.points[j];
         let s = &self.ctx.src_flat[i * self.nj + j];
         (0..3)
@@ -464,139 +442,6 @@ impl<'a> Eval<'a> {
         (0..self.at.len()).all(|i| {
             (0..self.ctx.limits.len()).all(|j| self.joint_error(i, j) <= self.ctx.limits[j])
         })
-    }
-
-    /// Sets component `c` of segment `s` to `bits` (tentatively: [`Eval::undo`] reverts it) and
-    /// returns the largest ratio of error to limit over the joints and times that changed. As soon
-    /// as one ratio exceeds `cap` it stops and returns infinity, leaving a state that only
-    /// [`Eval::undo`] may follow.
-    pub(super) fn set(&mut self, s: usize, c: usize, bits: u8, cap: f32) -> f32 {
-        let nc = self.layout.comps.len();
-        self.undo.comps.clear();
-        self.undo.key_rot.clear();
-        self.undo.raw.clear();
-        self.undo.poses.clear();
-        self.undo.bits = Some((s * nc + c, self.bits[s * nc + c]));
-        self.bits[s * nc + c] = bits;
-        self.params[s * nc + c] = self.layout.params(s, c, bits);
-        let j = self.joint[self.layout.comps[c].track];
-        let joints = std::mem::take(&mut self.subtree[j]);
-        let times = std::mem::take(&mut self.seg_times[s]);
-        let worst = self.measure_change(s, c, &joints, &times, cap);
-        self.seg_times[s] = times;
-        self.subtree[j] = joints;
-        worst
-    }
-
-    /// The body of [`Eval::set`]: requantizes segment `s` for `joints` (component `c` changed) and
-    /// measures the joints that moved at `times`, interleaved so that a failing change stops early.
-    ///
-    /// The result is that of requantizing the whole segment and then measuring every time, every
-    /// joint that moved (a joint whose values changed anywhere in the segment, or below one):
-    /// - a time is measured once the keys it reads are requantized (keys go in order); a joint that
-    ///   moved by then is computed as the whole pass computes it (its values there are final);
-    /// - a joint that moves only through later keys keeps its values at that time (the keys it reads
-    ///   there did not change), so its error there is the one it had: measured after the segment.
-    fn measure_change(
-        &mut self,
-        s: usize,
-        c: usize,
-        joints: &[usize],
-        times: &[usize],
-        cap: f32,
-    ) -> f32 {
-        for &d in joints {
-            self.dirty[d] = false;
-        }
-        let keys = self.layout.seg_keys(s);
-        let mut next = keys.start;
-        let nj = joints.len();
-        let mut seen = std::mem::take(&mut self.seen);
-        seen.clear();
-        seen.resize(times.len() * nj, false);
-        let mut worst = 0.0f32;
-        let mut failed = false;
-        'times: for (pos, &i) in times.iter().enumerate() {
-            let (k0, k1, a) = self.at[i];
-            let mut need = next;
-            if keys.contains(&k0) {
-                need = need.max(k0 + 1);
-            }
-            if a != 0.0 && keys.contains(&k1) {
-                need = need.max(k1 + 1);
-            }
-            while next < need {
-                self.requantize_key(s, next, joints, Some(c), true);
-                next += 1;
-            }
-            self.resample(i, joints, true);
-            for (n, &d) in joints.iter().enumerate() {
-                if !self.moved[d] {
-                    continue;
-                }
-                seen[pos * nj + n] = true;
-                let r = self.joint_error(i, d) / self.ctx.limits[d];
-                if exceeds(r, cap) {
-                    failed = true;
-                    break 'times;
-                }
-                worst = worst.max(r);
-            }
-        }
-        if !failed {
-            while next < keys.end {
-                self.requantize_key(s, next, joints, Some(c), true);
-                next += 1;
-            }
-            'late: for (pos, &i) in times.iter().enumerate() {
-                for (n, &d) in joints.iter().enumerate() {
-                    let below = n > 0 && self.parent(d).is_some_and(|p| self.moved[p]);
-                    self.moved[d] = self.dirty[d] || below;
-                    if !self.moved[d] || seen[pos * nj + n] {
-                        continue;
-                    }
-                    let r = self.joint_error(i, d) / self.ctx.limits[d];
-                    if exceeds(r, cap) {
-                        failed = true;
-                        break 'late;
-                    }
-                    worst = worst.max(r);
-                }
-            }
-        }
-        self.seen = seen;
-        if failed {
-            f32::INFINITY
-        } else {
-            worst
-        }
-    }
-
-    /// Reverts the last [`Eval::set`].
-    pub(super) fn undo(&mut self) {
-        if let Some((i, b)) = self.undo.bits.take() {
-            self.bits[i] = b;
-            let nc = self.layout.comps.len().max(1);
-            self.params[i] = self.layout.params(i / nc, i % nc, b);
-        }
-        for &(c, k, q, x) in self.undo.comps.iter().rev() {
-            self.qi[c][k] = q;
-            self.dec[c][k] = x;
-        }
-        for &(k, d, r) in self.undo.key_rot.iter().rev() {
-            self.key_rot[k * self.nj + d] = r;
-        }
-        for &(r, k, q) in self.undo.raw.iter().rev() {
-            self.raw[r][k] = q;
-        }
-        for &(i, d, a, m) in self.undo.poses.iter().rev() {
-            self.local_aff[i * self.nj + d] = a;
-            self.model[i * self.nj + d] = m;
-        }
-        self.undo.comps.clear();
-        self.undo.key_rot.clear();
-        self.undo.raw.clear();
-        self.undo.poses.clear();
     }
 
     /// The compressed clip of the current state.

@@ -42,15 +42,20 @@
 //!
 //! # Speed, and the same bytes at any thread count
 //!
-//! - The error is kept up to date incrementally (`eval.rs`): a tentative width change requantizes
-//!   only its segment's keys of the joint's subtree, and re-measures only the source times that
-//!   read the segment, time by time as its keys are requantized, stopping at the first time over
-//!   the round's threshold (a failed try costs a fraction of a full one; the decision is the one a
-//!   whole pass would make). First-width checks likewise quantize keys as the times reach them.
+//! - The error is kept up to date incrementally (`eval.rs`): a tentative width change (`trial.rs`)
+//!   requantizes only its segment's keys of the joint's subtree, and re-measures only the source
+//!   times that read the segment, time by time as its keys are requantized, stopping at the first
+//!   time over the round's threshold (a failed try costs a fraction of a full one; the decision is
+//!   the one a whole pass would make). First-width checks likewise quantize keys as the times reach
+//!   them.
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and the refinements of the best
-//!   candidates. Every result is collected in a fixed order and the choices are the sequential
-//!   ones, so the output does not depend on the thread count (tests compare 1, 2 and 3 threads).
+//!   candidates. A long clip's single refinement spreads its own tries: a try writes only into its
+//!   own buffers, and tries on segments two or more apart read and write disjoint keys and times,
+//!   so each wavefront of such tries is worked out in parallel and committed in the sequential
+//!   order. Every result is collected in a fixed order and the choices are the sequential ones, so
+//!   the output does not depend on the thread count (tests compare 1, 2 and 3 threads, and the
+//!   wavefronts against one try at a time).
 //!
 //! The limits are per joint: the tolerance less a margin for f32 noise (a few ulps of the joint's
 //! model-space coordinates), so that an independent measurement against the source data also stays
@@ -66,6 +71,7 @@ mod reduce;
 mod search;
 #[cfg(test)]
 mod tests;
+mod trial;
 
 pub use metric::{measure, skeleton_extent};
 pub use options::{

@@ -9,6 +9,7 @@ use super::options::{
 };
 use super::quantize::Layout;
 use super::reduce::{reduce_keys, simplify_channels, Work};
+use super::trial::Trial;
 use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::{Channel, Clip, Skeleton};
@@ -89,27 +90,58 @@ pub(super) fn first_state(
 /// threshold; thresholds rise over the first rounds ([`THRESHOLDS`]) so that the cheapest
 /// reductions are taken first, then stay at 1 until no reduction is kept. A reduction that fails
 /// at threshold 1 is not tried again (errors only grow as other widths shrink).
-pub(super) fn descend(eval: &mut Eval) {
+///
+/// Within a round the tries go component by component, segment by segment. A try reads and writes
+/// only its segment's keys and the source times that read them, so tries on segments two or more
+/// apart are independent: the tries of component `c` on segment `s` with the same `2c + s` (a
+/// wavefront) are worked out at the same time ([`Trial`]; in parallel with `par`) and committed in
+/// order. Every try sees what it would see one at a time, so the result is the same at any thread
+/// count.
+pub(super) fn descend(eval: &mut Eval, par: bool) {
     let nc = eval.layout.comps.len();
     let segs = eval.layout.seg_count;
+    if nc == 0 || segs == 0 {
+        return;
+    }
     let mut blocked = vec![false; nc * segs];
+    let steps = 2 * (nc - 1) + segs;
+    let mut trials: Vec<Trial> = (0..segs.div_ceil(2).min(nc))
+        .map(|_| Trial::new())
+        .collect();
+    let mut items: Vec<(usize, usize)> = Vec::new();
     let mut round = 0;
     loop {
         let limit = THRESHOLDS.get(round).copied().unwrap_or(1.0);
         round += 1;
         let mut changed = false;
-        for c in 0..nc {
-            for s in 0..segs {
+        for step in 0..steps {
+            items.clear();
+            let first = step.saturating_sub(segs - 1).div_ceil(2);
+            for c in first..=(step / 2).min(nc - 1) {
+                let s = step - 2 * c;
                 let i = s * nc + c;
-                let b = eval.bits[i];
-                if b == 0 || blocked[i] {
-                    continue;
+                if s < segs && eval.bits[i] > 0 && !blocked[i] {
+                    items.push((c, s));
                 }
-                if eval.set(s, c, b - 1, limit) <= limit {
+            }
+            while trials.len() < items.len() {
+                trials.push(Trial::new());
+            }
+            let e: &Eval = eval;
+            let run = |(&(c, s), t): (&(usize, usize), &mut Trial)| {
+                t.run(e, s, c, e.bits[s * nc + c] - 1, limit);
+            };
+            if par && items.len() > 1 {
+                items.par_iter().zip(trials.par_iter_mut()).for_each(run);
+            } else {
+                items.iter().zip(trials.iter_mut()).for_each(run);
+            }
+            for (&(c, s), t) in items.iter().zip(&trials) {
+                if t.worst <= limit {
+                    t.commit(eval);
                     changed = true;
                 } else {
-                    eval.undo();
-                    blocked[i] = limit >= 1.0;
+                    blocked[s * nc + c] = limit >= 1.0;
                 }
             }
         }
@@ -269,12 +301,15 @@ pub(super) fn compress_work(
         .collect();
     // The refinements are independent: run in parallel, the smallest kept (the first of equals
     // in candidate order, so the result does not depend on the thread count).
+    // A long clip's one refinement spreads its own tries over the threads (its wavefronts are
+    // wide: many segments); shorter clips refine several candidates side by side instead.
+    let alone = par && chosen.len() == 1 && volume > LARGE_CLIP;
     let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(_, li, bits)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
         let mut e = Eval::new(&ctx, layout, w, bits, compensate);
         let before = e.encode(w);
-        descend(&mut e);
+        descend(&mut e, alone);
         [e.encode(w), before]
             .into_iter()
             .flatten()

@@ -29,6 +29,11 @@ fn chain(n: usize, bone: f32) -> Skeleton {
 
 /// Every joint of `skeleton` swinging about a different axis, `keys` keys at 30 Hz.
 fn swing(skeleton: &Skeleton, keys: usize) -> Clip {
+    swing_moving(skeleton, keys, false)
+}
+
+/// [`swing`], with the root also moving (`moving`).
+fn swing_moving(skeleton: &Skeleton, keys: usize, moving: bool) -> Clip {
     let times: Vec<f32> = (0..keys).map(|k| k as f32 / 30.0).collect();
     let tracks = skeleton
         .names()
@@ -40,9 +45,19 @@ fn swing(skeleton: &Skeleton, keys: usize) -> Clip {
                 .iter()
                 .map(|t| Quat::from_axis_angle(axis, 0.6 * (t * (2.0 + j as f32 * 0.7)).sin()))
                 .collect();
+            let translation = if moving && j == 0 {
+                let path = times
+                    .iter()
+                    .map(|t| Vec3::new(t.sin(), 0.1 * t, (2.0 * t).cos()))
+                    .collect();
+                Curve::new(times.clone(), path)
+            } else {
+                Curve::default()
+            };
             TrackCurves {
                 joint: name.clone(),
                 rotation: Curve::new(times.clone(), rotation),
+                translation,
                 ..Default::default()
             }
         })
@@ -127,7 +142,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
         let layout = Layout::new(&work, &rig, 16, compensate);
         let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate, true).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
-        descend(&mut e);
+        descend(&mut e, true);
         assert!(
             e.bits.iter().zip(&bits).any(|(a, b)| a < b),
             "nothing descended"
@@ -285,4 +300,152 @@ fn constant_channels_at_the_bind_value_are_stored_as_bind() {
     let t = &c.tracks()[2];
     assert!(matches!(t.translation, Constant(v) if v == Vec3::Y * 0.3));
     assert!(matches!(t.scale, Constant(v) if v == Vec3::ONE));
+}
+
+/// The refinement one try at a time, in its documented order (component by component, segment by
+/// segment, each kept try committed before the next is worked out): the reference the wavefront
+/// schedule of [`descend`] must reproduce.
+fn descend_one_at_a_time(eval: &mut Eval) {
+    let nc = eval.layout.comps.len();
+    let segs = eval.layout.seg_count;
+    let mut blocked = vec![false; nc * segs];
+    let mut trial = super::trial::Trial::new();
+    let mut round = 0;
+    loop {
+        let limit = THRESHOLDS.get(round).copied().unwrap_or(1.0);
+        round += 1;
+        let mut changed = false;
+        for c in 0..nc {
+            for s in 0..segs {
+                let i = s * nc + c;
+                if eval.bits[i] == 0 || blocked[i] {
+                    continue;
+                }
+                trial.run(eval, s, c, eval.bits[i] - 1, limit);
+                if trial.worst <= limit {
+                    trial.commit(eval);
+                    changed = true;
+                } else {
+                    blocked[i] = limit >= 1.0;
+                }
+            }
+        }
+        if !changed && round >= THRESHOLDS.len() {
+            break;
+        }
+    }
+}
+
+#[test]
+fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
+    // Six joints whose root also moves, 200 keys: 13 segments of 16, so that each wavefront
+    // holds several tries (translations and rotations, whole subtrees under compensation).
+    let skeleton = chain(6, 0.35);
+    let source = swing_moving(&skeleton, 200, true).to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    for compensate in [true, false] {
+        let layout = Layout::new(&work, &rig, 16, compensate);
+        assert_eq!(layout.seg_count, 13);
+        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate, true).unwrap();
+        let mut want = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
+        descend_one_at_a_time(&mut want);
+        assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
+        for par in [false, true] {
+            let mut got = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
+            descend(&mut got, par);
+            assert_eq!(
+                got.bits, want.bits,
+                "compensate {compensate}, parallel {par}"
+            );
+            assert_eq!(got.qi, want.qi);
+            let model_bits = |e: &Eval| -> Vec<u32> {
+                e.model
+                    .iter()
+                    .flat_map(|m| m.to_cols_array())
+                    .map(f32::to_bits)
+                    .collect()
+            };
+            assert_eq!(model_bits(&got), model_bits(&want));
+        }
+    }
+}
+
+#[test]
+fn tries_two_segments_apart_do_not_see_each_other() {
+    // What the wavefront relies on: a kept try changes nothing that a try on a segment two or
+    // more away reads, so the second try measures the same, bit for bit, before and after the
+    // first is committed. Tries on neighbouring segments do see each other (so that this test
+    // can tell).
+    let skeleton = chain(5, 0.35);
+    let source = swing_moving(&skeleton, 120, true).to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let layout = Layout::new(&work, &rig, 16, true);
+    let segs = layout.seg_count;
+    let nc = layout.comps.len();
+    assert_eq!(segs, 8);
+    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true).unwrap();
+    let measure = |e: &Eval, s: usize, c: usize| -> u32 {
+        let mut t = super::trial::Trial::new();
+        t.run(e, s, c, e.bits[s * nc + c].saturating_sub(2), f32::INFINITY);
+        t.worst.to_bits()
+    };
+    let (mut apart, mut near_differ) = (0, 0);
+    // The root's translation and rotation components, and one of the last joint's rotation.
+    for c1 in [0, 3, nc - 1] {
+        for s1 in 0..segs {
+            let mut after = Eval::new(&ctx, &layout, &work, bits.clone(), true);
+            let mut t = super::trial::Trial::new();
+            t.run(
+                &after,
+                s1,
+                c1,
+                after.bits[s1 * nc + c1].saturating_sub(2),
+                f32::INFINITY,
+            );
+            t.commit(&mut after);
+            let before = Eval::new(&ctx, &layout, &work, bits.clone(), true);
+            for c2 in [0, 4, nc - 2] {
+                for s2 in 0..segs {
+                    let (x, y) = (measure(&before, s2, c2), measure(&after, s2, c2));
+                    if s1.abs_diff(s2) >= 2 {
+                        assert_eq!(x, y, "try ({c1}, {s1}) then ({c2}, {s2})");
+                        apart += 1;
+                    } else if x != y {
+                        near_differ += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(apart > 300, "{apart}");
+    assert!(near_differ > 10, "{near_differ}");
+}
+
+#[test]
+fn a_long_clip_refined_alone_compresses_to_the_same_bytes_at_any_thread_count() {
+    // Above LARGE_CLIP one candidate is refined, and its tries are spread over the threads
+    // (wavefronts of tries on segments two apart).
+    let skeleton = chain(6, 0.3);
+    let clip = swing_moving(&skeleton, 3400, true);
+    assert!(clip.times().len() * skeleton.len() > LARGE_CLIP);
+    let runs: Vec<(Clip, ClipCompressionReport)> = [1, 2, 3]
+        .into_iter()
+        .map(|threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| compress_clip(&clip, Some(&skeleton), &CompressOptions::peers()))
+        })
+        .collect();
+    assert!(runs[0].0.is_compressed());
+    assert!(runs[0].1.max_error <= 0.001, "{:?}", runs[0].1);
+    for r in &runs[1..] {
+        assert_eq!(r.0, runs[0].0);
+        assert_eq!(r.1, runs[0].1);
+    }
 }

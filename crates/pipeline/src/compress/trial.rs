@@ -1,0 +1,437 @@
+//! Tentative bit-width changes, worked out beside the state they start from.
+//!
+//! A [`Trial`] lowers one component of one segment by a bit against an [`Eval`] it only reads: the
+//! values it changes (stored integers and decoded values of the segment's keys, the subtree's
+//! rotations and model rotations at those keys, the subtree's local and model transforms at the
+//! source times that read the segment) go into its own buffers, with a flag per entry. A trial that
+//! stays within the limits is then [`Trial::commit`]ted into the state; one that does not is simply
+//! dropped. Two trials on segments two or more apart read and write disjoint parts of the state
+//! (their keys differ, and so do the source times that read them), so the refinement runs them at
+//! the same time and commits them in order, with the decisions of one trial at a time.
+
+use super::eval::Eval;
+use super::metric::exceeds;
+use super::quantize::{raw_rotation, Kind, Quant};
+use sinew_core::clip::normalize_rotation;
+use sinew_core::glam::{Affine3A, Quat};
+
+/// The buffers of one tentative change (reused from trial to trial).
+pub(super) struct Trial {
+    s: usize,
+    c: usize,
+    bits: u8,
+    quant: Quant,
+    /// The changed component's joint, and whether the component is a rotation's.
+    j: usize,
+    rot: bool,
+    /// The segment's first key and key count; the joint's subtree size.
+    key0: usize,
+    nk: usize,
+    nsub: usize,
+    /// Per slot (the changed component for a translation or scale; three per subtree joint for a
+    /// rotation), per segment key: stored integer, decoded value, written.
+    qi: Vec<u32>,
+    dec: Vec<f32>,
+    dec_set: Vec<bool>,
+    /// Per subtree joint, per segment key: the rotation as decoded (before normalisation) and the
+    /// model rotation, and whether each was written.
+    raw: Vec<Quat>,
+    raw_set: Vec<bool>,
+    key_rot: Vec<Quat>,
+    key_rot_set: Vec<bool>,
+    /// Per source time of the segment, per subtree joint: local and model transforms, written.
+    local_aff: Vec<Affine3A>,
+    local_set: Vec<bool>,
+    model: Vec<Affine3A>,
+    model_set: Vec<bool>,
+    /// Per subtree joint: its values changed / its model transforms changed.
+    dirty: Vec<bool>,
+    moved: Vec<bool>,
+    /// Per source time of the segment, per subtree joint: measured already.
+    seen: Vec<bool>,
+    /// The largest ratio of error to limit over the joints and times that changed, or infinity
+    /// when one exceeded the cap (the trial then stopped there).
+    pub(super) worst: f32,
+}
+
+impl Trial {
+    /// Empty buffers.
+    pub(super) fn new() -> Trial {
+        Trial {
+            s: 0,
+            c: 0,
+            bits: 0,
+            quant: Quant {
+                scale: 0.0,
+                bias: 0.0,
+                top: 0,
+            },
+            j: 0,
+            rot: false,
+            key0: 0,
+            nk: 0,
+            nsub: 0,
+            qi: Vec::new(),
+            dec: Vec::new(),
+            dec_set: Vec::new(),
+            raw: Vec::new(),
+            raw_set: Vec::new(),
+            key_rot: Vec::new(),
+            key_rot_set: Vec::new(),
+            local_aff: Vec::new(),
+            local_set: Vec::new(),
+            model: Vec::new(),
+            model_set: Vec::new(),
+            dirty: Vec::new(),
+            moved: Vec::new(),
+            seen: Vec::new(),
+            worst: 0.0,
+        }
+    }
+
+    /// Works out setting component `c` of segment `s` to `bits` on `e` (see the module docs) and
+    /// sets [`Trial::worst`]. As soon as one ratio exceeds `cap` it stops: `worst` is infinity.
+    ///
+    /// The result is that of requantizing the whole segment and then measuring every time, every
+    /// joint that moved (a joint whose values changed anywhere in the segment, or below one):
+    /// - a time is measured once the keys it reads are requantized (keys go in order); a joint that
+    ///   moved by then is computed as the whole pass computes it (its values there are final);
+    /// - a joint that moves only through later keys keeps its values at that time (the keys it reads
+    ///   there did not change), so its error there is the one it had: measured after the segment.
+    pub(super) fn run(&mut self, e: &Eval, s: usize, c: usize, bits: u8, cap: f32) {
+        let keys = e.layout.seg_keys(s);
+        let j = e.joint[e.layout.comps[c].track];
+        let joints = &e.subtree[j];
+        let times = &e.seg_times[s];
+        self.s = s;
+        self.c = c;
+        self.bits = bits;
+        self.quant = e.layout.params(s, c, bits);
+        self.j = j;
+        self.rot = e.layout.comps[c].kind == Kind::R;
+        self.key0 = keys.start;
+        self.nk = keys.len();
+        self.nsub = joints.len();
+        let slots = if self.rot { 3 * self.nsub } else { 1 };
+        grow(&mut self.qi, slots * self.nk, 0);
+        grow(&mut self.dec, slots * self.nk, 0.0);
+        reset(&mut self.dec_set, slots * self.nk, false);
+        for v in [&mut self.raw, &mut self.key_rot] {
+            grow(v, self.nsub * self.nk, Quat::IDENTITY);
+        }
+        for f in [&mut self.raw_set, &mut self.key_rot_set] {
+            reset(f, self.nsub * self.nk, false);
+        }
+        let poses = times.len() * self.nsub;
+        for v in [&mut self.local_aff, &mut self.model] {
+            grow(v, poses, Affine3A::IDENTITY);
+        }
+        for f in [&mut self.local_set, &mut self.model_set, &mut self.seen] {
+            reset(f, poses, false);
+        }
+        reset(&mut self.dirty, self.nsub, false);
+        reset(&mut self.moved, self.nsub, false);
+        let nsub = self.nsub;
+        let mut next = keys.start;
+        let mut worst = 0.0f32;
+        let mut failed = false;
+        'times: for (pos, &i) in times.iter().enumerate() {
+            let (k0, k1, a) = e.at[i];
+            let mut need = next;
+            if keys.contains(&k0) {
+                need = need.max(k0 + 1);
+            }
+            if a != 0.0 && keys.contains(&k1) {
+                need = need.max(k1 + 1);
+            }
+            while next < need {
+                self.requantize(e, next);
+                next += 1;
+            }
+            self.resample(e, pos, i);
+            for (n, &d) in joints.iter().enumerate() {
+                if !self.moved[n] {
+                    continue;
+                }
+                self.seen[pos * nsub + n] = true;
+                let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
+                if exceeds(r, cap) {
+                    failed = true;
+                    break 'times;
+                }
+                worst = worst.max(r);
+            }
+        }
+        if !failed {
+            while next < keys.end {
+                self.requantize(e, next);
+                next += 1;
+            }
+            let parents = &e.subtree_parent[j];
+            'late: for (pos, &i) in times.iter().enumerate() {
+                for (n, &d) in joints.iter().enumerate() {
+                    let below = n > 0 && self.parent_moved(parents, n);
+                    self.moved[n] = self.dirty[n] || below;
+                    if !self.moved[n] || self.seen[pos * nsub + n] {
+                        continue;
+                    }
+                    let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
+                    if exceeds(r, cap) {
+                        failed = true;
+                        break 'late;
+                    }
+                    worst = worst.max(r);
+                }
+            }
+        }
+        self.worst = if failed { f32::INFINITY } else { worst };
+    }
+
+    /// Writes the trial's changes into `e` (the state it was run on, unchanged since).
+    pub(super) fn commit(&self, e: &mut Eval) {
+        let nc = e.layout.comps.len();
+        let nj = e.nj;
+        e.bits[self.s * nc + self.c] = self.bits;
+        e.params[self.s * nc + self.c] = self.quant;
+        let joints = std::mem::take(&mut e.subtree[self.j]);
+        let slots = if self.rot { 3 * self.nsub } else { 1 };
+        for sl in 0..slots {
+            let Some(x) = self.slot_comp(e, &joints, sl) else {
+                continue;
+            };
+            for kk in 0..self.nk {
+                let at = sl * self.nk + kk;
+                if self.dec_set[at] {
+                    e.qi[x][self.key0 + kk] = self.qi[at];
+                    e.dec[x][self.key0 + kk] = self.dec[at];
+                }
+            }
+        }
+        for (n, &d) in joints.iter().enumerate() {
+            let rotation = rotation_of(e, d);
+            for kk in 0..self.nk {
+                let at = n * self.nk + kk;
+                let k = self.key0 + kk;
+                if let (true, Some(ri)) = (self.raw_set[at], rotation) {
+                    e.raw[ri][k] = self.raw[at];
+                }
+                if self.key_rot_set[at] {
+                    e.key_rot[k * nj + d] = self.key_rot[at];
+                }
+            }
+        }
+        let times = std::mem::take(&mut e.seg_times[self.s]);
+        for (pos, &i) in times.iter().enumerate() {
+            for (n, &d) in joints.iter().enumerate() {
+                let at = pos * self.nsub + n;
+                if self.local_set[at] {
+                    e.local_aff[i * nj + d] = self.local_aff[at];
+                }
+                if self.model_set[at] {
+                    e.model[i * nj + d] = self.model[at];
+                }
+            }
+        }
+        e.seg_times[self.s] = times;
+        e.subtree[self.j] = joints;
+    }
+
+    /// The component kept in slot `sl`: the changed one for a translation or scale; for a
+    /// rotation, component `sl % 3` of subtree joint `sl / 3`'s rotation.
+    fn slot_comp(&self, e: &Eval, joints: &[usize], sl: usize) -> Option<usize> {
+        if !self.rot {
+            return Some(self.c);
+        }
+        let d = *joints.get(sl / 3)?;
+        let tr = e.track_of[d]?;
+        e.first[tr][Kind::R as usize].map(|c0| c0 + sl % 3)
+    }
+
+    fn in_segment(&self, k: usize) -> Option<usize> {
+        k.checked_sub(self.key0).filter(|&kk| kk < self.nk)
+    }
+
+    /// Component `x`'s stored integer and decoded value at key `k` of the segment (`kk` in it),
+    /// kept in slot `sl`, as the trial has them.
+    fn stored(&self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize) -> (u32, f32) {
+        let at = sl * self.nk + kk;
+        if self.dec_set[at] {
+            (self.qi[at], self.dec[at])
+        } else {
+            (e.qi[x][k], e.dec[x][k])
+        }
+    }
+
+    /// Quantizes `v` as component `x` (slot `sl`) of key `k` of the segment (`kk` in it);
+    /// returns whether the stored value changed.
+    fn store(&mut self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize, v: f32) -> bool {
+        let quant = if x == self.c {
+            self.quant
+        } else {
+            e.params[self.s * e.layout.comps.len() + x]
+        };
+        let (q, y) = quant.quantize(v);
+        let (oq, oy) = self.stored(e, x, sl, k, kk);
+        let changed = q != oq || y.to_bits() != oy.to_bits();
+        if changed {
+            let at = sl * self.nk + kk;
+            self.qi[at] = q;
+            self.dec[at] = y;
+            self.dec_set[at] = true;
+        }
+        changed
+    }
+
+    /// Subtree joint `n`'s rotation as decoded at key `k` (rotation number `ri`), as the trial has
+    /// it.
+    fn raw_of(&self, e: &Eval, n: usize, ri: usize, k: usize) -> Quat {
+        if let Some(kk) = self.in_segment(k) {
+            let at = n * self.nk + kk;
+            if self.raw_set[at] {
+                return self.raw[at];
+            }
+        }
+        e.raw[ri][k]
+    }
+
+    /// [`Eval::requantize_key`] for the changed component at key `k` of the segment.
+    fn requantize(&mut self, e: &Eval, k: usize) {
+        let kk = k - self.key0;
+        if !self.rot {
+            // A translation or scale component: nothing else depends on it.
+            let v = e.layout.comps[self.c].vals[k];
+            let changed = self.store(e, self.c, 0, k, kk, v);
+            self.dirty[0] |= changed;
+            return;
+        }
+        let joints = &e.subtree[self.j];
+        let parents = &e.subtree_parent[self.j];
+        for (n, &d) in joints.iter().enumerate() {
+            if n > 0 && !e.compensate {
+                break;
+            }
+            let pr = match (e.parent(d), parents.get(n).filter(|&&np| np != usize::MAX)) {
+                (None, _) => Quat::IDENTITY,
+                (Some(_), Some(&np)) if self.key_rot_set[np * self.nk + kk] => {
+                    self.key_rot[np * self.nk + kk]
+                }
+                (Some(p), _) => e.key_rot[k * e.nj + p],
+            };
+            let mut rot = e.base[d].rotation;
+            let mut rot_changed = false;
+            if let Some(c0) = e.track_of[d].and_then(|tr| e.first[tr][Kind::R as usize]) {
+                let ri = e.layout.comps[c0].rot;
+                let index = e.layout.index[ri][k];
+                let vals = e.rotation_values(d, c0, k, pr);
+                for (a, &v) in vals.iter().enumerate() {
+                    rot_changed |= self.store(e, c0 + a, 3 * n + a, k, kk, v);
+                }
+                self.dirty[n] |= rot_changed;
+                let q = [0, 1, 2].map(|a| self.stored(e, c0 + a, 3 * n + a, k, kk).1);
+                let raw = raw_rotation(index, q);
+                let at = n * self.nk + kk;
+                self.raw[at] = raw;
+                self.raw_set[at] = true;
+                rot = normalize_rotation(raw);
+            }
+            if n == 0 && !rot_changed {
+                // The joint's rotation at this key did not change: nothing below it does.
+                break;
+            }
+            let at = n * self.nk + kk;
+            self.key_rot[at] = pr * rot;
+            self.key_rot_set[at] = true;
+        }
+    }
+
+    /// Whether subtree joint `n`'s parent (in the subtree) moved.
+    fn parent_moved(&self, parents: &[usize], n: usize) -> bool {
+        parents
+            .get(n)
+            .and_then(|&np| self.moved.get(np))
+            .copied()
+            .unwrap_or(false)
+    }
+
+    /// Subtree joint `n` (`d`)'s model transform at the segment's time `pos` (source time `i`).
+    fn model_of(&self, e: &Eval, pos: usize, i: usize, n: usize, d: usize) -> Affine3A {
+        let at = pos * self.nsub + n;
+        if self.model_set[at] {
+            self.model[at]
+        } else {
+            e.model[i * e.nj + d]
+        }
+    }
+
+    /// [`Eval::resample`] for the subtree at the segment's time `pos` (source time `i`).
+    fn resample(&mut self, e: &Eval, pos: usize, i: usize) {
+        let joints = &e.subtree[self.j];
+        let parents = &e.subtree_parent[self.j];
+        for (n, &d) in joints.iter().enumerate() {
+            let below = n > 0 && self.parent_moved(parents, n);
+            self.moved[n] = self.dirty[n] || below;
+            if !self.moved[n] {
+                continue;
+            }
+            let at = pos * self.nsub + n;
+            if self.dirty[n] {
+                // Only the changed translation or scale component, or the subtree's rotations,
+                // differ from the state.
+                let local = match e.track_of[d] {
+                    Some(tr) if self.rot => e.sampled_with(
+                        tr,
+                        i,
+                        e.base[d],
+                        |x, k| e.dec[x][k],
+                        |ri, k| self.raw_of(e, n, ri, k),
+                    ),
+                    Some(tr) => e.sampled_with(
+                        tr,
+                        i,
+                        e.base[d],
+                        |x, k| match self.in_segment(k).filter(|_| x == self.c) {
+                            Some(kk) => self.stored(e, x, 0, k, kk).1,
+                            None => e.dec[x][k],
+                        },
+                        |ri, k| e.raw[ri][k],
+                    ),
+                    None => e.base[d],
+                };
+                self.local_aff[at] = local.to_affine();
+                self.local_set[at] = true;
+            }
+            let local = if self.local_set[at] {
+                self.local_aff[at]
+            } else {
+                e.local_aff[i * e.nj + d]
+            };
+            let pm = match (e.parent(d), parents.get(n).filter(|&&np| np != usize::MAX)) {
+                (None, _) => Affine3A::IDENTITY,
+                (Some(p), Some(&np)) => self.model_of(e, pos, i, np, p),
+                (Some(p), None) => e.model[i * e.nj + p],
+            };
+            self.model[at] = pm * local;
+            self.model_set[at] = true;
+        }
+    }
+}
+
+/// Joint `d`'s rotation number, if its rotation is quantized.
+fn rotation_of(e: &Eval, d: usize) -> Option<usize> {
+    let tr = e.track_of[d]?;
+    e.first[tr][Kind::R as usize].map(|c0| e.layout.comps[c0].rot)
+}
+
+/// `v` holding `len` entries equal to `fill` (reusing its allocation): for flags.
+fn reset<T: Copy>(v: &mut Vec<T>, len: usize, fill: T) {
+    v.clear();
+    v.resize(len, fill);
+}
+
+/// `v` holding at least `len` entries: for values, which are read only where a flag says they
+/// were written.
+fn grow<T: Copy>(v: &mut Vec<T>, len: usize, fill: T) {
+    if v.len() < len {
+        v.resize(len, fill);
+    }
+}

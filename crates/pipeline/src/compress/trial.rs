@@ -28,17 +28,20 @@ pub(super) struct Trial {
     key0: usize,
     nk: usize,
     nsub: usize,
+    /// Keys of the segment requantized so far (each once, in order; a time reads only those).
+    done: usize,
+    /// Per segment key: how many subtree joints (the first ones, in order) were requantized at it
+    /// (a rotation's change stops where a joint's rotation does not change: nothing below does).
+    reached: Vec<usize>,
     /// Per slot (the changed component for a translation or scale; three per subtree joint for a
-    /// rotation), per segment key: stored integer, decoded value, written.
+    /// rotation), per segment key: stored integer and decoded value, valid for requantized keys
+    /// and joints.
     qi: Vec<u32>,
     dec: Vec<f32>,
-    dec_set: Vec<bool>,
     /// Per subtree joint, per segment key: the rotation as decoded (before normalisation) and the
-    /// model rotation, and whether each was written.
+    /// model rotation, valid likewise.
     raw: Vec<Quat>,
-    raw_set: Vec<bool>,
     key_rot: Vec<Quat>,
-    key_rot_set: Vec<bool>,
     /// Per source time of the segment, per subtree joint: local and model transforms, written.
     local_aff: Vec<Affine3A>,
     local_set: Vec<bool>,
@@ -71,13 +74,12 @@ impl Trial {
             key0: 0,
             nk: 0,
             nsub: 0,
+            done: 0,
+            reached: Vec::new(),
             qi: Vec::new(),
             dec: Vec::new(),
-            dec_set: Vec::new(),
             raw: Vec::new(),
-            raw_set: Vec::new(),
             key_rot: Vec::new(),
-            key_rot_set: Vec::new(),
             local_aff: Vec::new(),
             local_set: Vec::new(),
             model: Vec::new(),
@@ -115,13 +117,11 @@ impl Trial {
         let slots = if self.rot { 3 * self.nsub } else { 1 };
         grow(&mut self.qi, slots * self.nk, 0);
         grow(&mut self.dec, slots * self.nk, 0.0);
-        reset(&mut self.dec_set, slots * self.nk, false);
         for v in [&mut self.raw, &mut self.key_rot] {
             grow(v, self.nsub * self.nk, Quat::IDENTITY);
         }
-        for f in [&mut self.raw_set, &mut self.key_rot_set] {
-            reset(f, self.nsub * self.nk, false);
-        }
+        self.done = 0;
+        reset(&mut self.reached, self.nk, 0);
         let poses = times.len() * self.nsub;
         for v in [&mut self.local_aff, &mut self.model] {
             grow(v, poses, Affine3A::IDENTITY);
@@ -147,6 +147,7 @@ impl Trial {
             while next < need {
                 self.requantize(e, next);
                 next += 1;
+                self.done = next - keys.start;
             }
             self.resample(e, pos, i);
             for (n, &d) in joints.iter().enumerate() {
@@ -166,6 +167,7 @@ impl Trial {
             while next < keys.end {
                 self.requantize(e, next);
                 next += 1;
+                self.done = next - keys.start;
             }
             let parents = &e.subtree_parent[j];
             'late: for (pos, &i) in times.iter().enumerate() {
@@ -194,30 +196,25 @@ impl Trial {
         e.bits[self.s * nc + self.c] = self.bits;
         e.params[self.s * nc + self.c] = self.quant;
         let joints = std::mem::take(&mut e.subtree[self.j]);
-        let slots = if self.rot { 3 * self.nsub } else { 1 };
-        for sl in 0..slots {
-            let Some(x) = self.slot_comp(e, &joints, sl) else {
-                continue;
-            };
-            for kk in 0..self.nk {
-                let at = sl * self.nk + kk;
-                if self.dec_set[at] {
-                    e.qi[x][self.key0 + kk] = self.qi[at];
-                    e.dec[x][self.key0 + kk] = self.dec[at];
-                }
+        if !self.rot {
+            for kk in 0..self.done {
+                e.qi[self.c][self.key0 + kk] = self.qi[kk];
+                e.dec[self.c][self.key0 + kk] = self.dec[kk];
             }
         }
-        for (n, &d) in joints.iter().enumerate() {
-            let rotation = rotation_of(e, d);
-            for kk in 0..self.nk {
+        for kk in 0..self.done.min(self.nk) {
+            let k = self.key0 + kk;
+            for (n, &d) in joints.iter().enumerate().take(self.reached[kk]) {
                 let at = n * self.nk + kk;
-                let k = self.key0 + kk;
-                if let (true, Some(ri)) = (self.raw_set[at], rotation) {
-                    e.raw[ri][k] = self.raw[at];
+                if let Some(c0) = e.track_of[d].and_then(|tr| e.first[tr][Kind::R as usize]) {
+                    for a in 0..3 {
+                        let slot = (3 * n + a) * self.nk + kk;
+                        e.qi[c0 + a][k] = self.qi[slot];
+                        e.dec[c0 + a][k] = self.dec[slot];
+                    }
+                    e.raw[e.layout.comps[c0].rot][k] = self.raw[at];
                 }
-                if self.key_rot_set[at] {
-                    e.key_rot[k * nj + d] = self.key_rot[at];
-                }
+                e.key_rot[k * nj + d] = self.key_rot[at];
             }
         }
         let times = std::mem::take(&mut e.seg_times[self.s]);
@@ -236,62 +233,34 @@ impl Trial {
         e.subtree[self.j] = joints;
     }
 
-    /// The component kept in slot `sl`: the changed one for a translation or scale; for a
-    /// rotation, component `sl % 3` of subtree joint `sl / 3`'s rotation.
-    fn slot_comp(&self, e: &Eval, joints: &[usize], sl: usize) -> Option<usize> {
-        if !self.rot {
-            return Some(self.c);
-        }
-        let d = *joints.get(sl / 3)?;
-        let tr = e.track_of[d]?;
-        e.first[tr][Kind::R as usize].map(|c0| c0 + sl % 3)
-    }
-
     fn in_segment(&self, k: usize) -> Option<usize> {
         k.checked_sub(self.key0).filter(|&kk| kk < self.nk)
     }
 
-    /// Component `x`'s stored integer and decoded value at key `k` of the segment (`kk` in it),
-    /// kept in slot `sl`, as the trial has them.
-    fn stored(&self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize) -> (u32, f32) {
-        let at = sl * self.nk + kk;
-        if self.dec_set[at] {
-            (self.qi[at], self.dec[at])
-        } else {
-            (e.qi[x][k], e.dec[x][k])
-        }
-    }
-
-    /// Quantizes `v` as component `x` (slot `sl`) of key `k` of the segment (`kk` in it);
-    /// returns whether the stored value changed.
-    fn store(&mut self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize, v: f32) -> bool {
+    /// Quantizes `v` as component `x` (slot `sl`) of key `k` of the segment (`kk` in it), which
+    /// this trial quantizes once: returns whether the stored value differs from the state's, and
+    /// the decoded value.
+    fn store(&mut self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize, v: f32) -> (bool, f32) {
         let quant = if x == self.c {
             self.quant
         } else {
             e.params[self.s * e.layout.comps.len() + x]
         };
         let (q, y) = quant.quantize(v);
-        let (oq, oy) = self.stored(e, x, sl, k, kk);
-        let changed = q != oq || y.to_bits() != oy.to_bits();
-        if changed {
-            let at = sl * self.nk + kk;
-            self.qi[at] = q;
-            self.dec[at] = y;
-            self.dec_set[at] = true;
-        }
-        changed
+        let changed = q != e.qi[x][k] || y.to_bits() != e.dec[x][k].to_bits();
+        let at = sl * self.nk + kk;
+        self.qi[at] = q;
+        self.dec[at] = y;
+        (changed, y)
     }
 
     /// Subtree joint `n`'s rotation as decoded at key `k` (rotation number `ri`), as the trial has
     /// it.
     fn raw_of(&self, e: &Eval, n: usize, ri: usize, k: usize) -> Quat {
-        if let Some(kk) = self.in_segment(k) {
-            let at = n * self.nk + kk;
-            if self.raw_set[at] {
-                return self.raw[at];
-            }
+        match self.in_segment(k) {
+            Some(kk) if kk < self.done && n < self.reached[kk] => self.raw[n * self.nk + kk],
+            _ => e.raw[ri][k],
         }
-        e.raw[ri][k]
     }
 
     /// [`Eval::requantize_key`] for the changed component at key `k` of the segment.
@@ -300,7 +269,7 @@ impl Trial {
         if !self.rot {
             // A translation or scale component: nothing else depends on it.
             let v = e.layout.comps[self.c].vals[k];
-            let changed = self.store(e, self.c, 0, k, kk, v);
+            let (changed, _) = self.store(e, self.c, 0, k, kk, v);
             self.dirty[0] |= changed;
             return;
         }
@@ -310,12 +279,11 @@ impl Trial {
             if n > 0 && !e.compensate {
                 break;
             }
+            // A parent inside the subtree was requantized just before (parents come first).
             let pr = match (e.parent(d), parents.get(n).filter(|&&np| np != usize::MAX)) {
                 (None, _) => Quat::IDENTITY,
-                (Some(_), Some(&np)) if self.key_rot_set[np * self.nk + kk] => {
-                    self.key_rot[np * self.nk + kk]
-                }
-                (Some(p), _) => e.key_rot[k * e.nj + p],
+                (Some(_), Some(&np)) => self.key_rot[np * self.nk + kk],
+                (Some(p), None) => e.key_rot[k * e.nj + p],
             };
             let mut rot = e.base[d].rotation;
             let mut rot_changed = false;
@@ -323,24 +291,23 @@ impl Trial {
                 let ri = e.layout.comps[c0].rot;
                 let index = e.layout.index[ri][k];
                 let vals = e.rotation_values(d, c0, k, pr);
+                let mut q = [0.0; 3];
                 for (a, &v) in vals.iter().enumerate() {
-                    rot_changed |= self.store(e, c0 + a, 3 * n + a, k, kk, v);
+                    let (changed, y) = self.store(e, c0 + a, 3 * n + a, k, kk, v);
+                    rot_changed |= changed;
+                    q[a] = y;
                 }
                 self.dirty[n] |= rot_changed;
-                let q = [0, 1, 2].map(|a| self.stored(e, c0 + a, 3 * n + a, k, kk).1);
                 let raw = raw_rotation(index, q);
-                let at = n * self.nk + kk;
-                self.raw[at] = raw;
-                self.raw_set[at] = true;
+                self.raw[n * self.nk + kk] = raw;
                 rot = normalize_rotation(raw);
             }
             if n == 0 && !rot_changed {
                 // The joint's rotation at this key did not change: nothing below it does.
                 break;
             }
-            let at = n * self.nk + kk;
-            self.key_rot[at] = pr * rot;
-            self.key_rot_set[at] = true;
+            self.key_rot[n * self.nk + kk] = pr * rot;
+            self.reached[kk] = n + 1;
         }
     }
 
@@ -390,8 +357,8 @@ impl Trial {
                         i,
                         e.base[d],
                         |x, k| match self.in_segment(k).filter(|_| x == self.c) {
-                            Some(kk) => self.stored(e, x, 0, k, kk).1,
-                            None => e.dec[x][k],
+                            Some(kk) if kk < self.done => self.dec[kk],
+                            _ => e.dec[x][k],
                         },
                         |ri, k| e.raw[ri][k],
                     ),
@@ -414,12 +381,6 @@ impl Trial {
             self.model_set[at] = true;
         }
     }
-}
-
-/// Joint `d`'s rotation number, if its rotation is quantized.
-fn rotation_of(e: &Eval, d: usize) -> Option<usize> {
-    let tr = e.track_of[d]?;
-    e.first[tr][Kind::R as usize].map(|c0| e.layout.comps[c0].rot)
 }
 
 /// `v` holding `len` entries equal to `fill` (reusing its allocation): for flags.

@@ -104,6 +104,8 @@ pub(super) fn descend(eval: &mut Eval, par: bool) {
         return;
     }
     let mut blocked = vec![false; nc * segs];
+    // Per component and segment: where its last failed try stopped (a time to measure first).
+    let mut probes = vec![usize::MAX; nc * segs];
     let steps = 2 * (nc - 1) + segs;
     let mut trials: Vec<Trial> = (0..segs.div_ceil(2).min(nc))
         .map(|_| Trial::new())
@@ -127,9 +129,11 @@ pub(super) fn descend(eval: &mut Eval, par: bool) {
             while trials.len() < items.len() {
                 trials.push(Trial::new());
             }
-            let e: &Eval = eval;
+            let (e, hints): (&Eval, &[usize]) = (eval, &probes);
             let run = |(&(c, s), t): (&(usize, usize), &mut Trial)| {
-                t.run(e, s, c, e.bits[s * nc + c] - 1, limit);
+                let i = s * nc + c;
+                let probe = hints.get(i).copied().filter(|&p| p != usize::MAX);
+                t.run(e, s, c, e.bits[i] - 1, limit, probe);
             };
             if par && items.len() > 1 {
                 items.par_iter().zip(trials.par_iter_mut()).for_each(run);
@@ -142,6 +146,9 @@ pub(super) fn descend(eval: &mut Eval, par: bool) {
                     changed = true;
                 } else {
                     blocked[s * nc + c] = limit >= 1.0;
+                    if t.failed_at != usize::MAX {
+                        probes[s * nc + c] = t.failed_at;
+                    }
                 }
             }
         }

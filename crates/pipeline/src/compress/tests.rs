@@ -321,7 +321,7 @@ fn descend_one_at_a_time(eval: &mut Eval) {
                 if eval.bits[i] == 0 || blocked[i] {
                     continue;
                 }
-                trial.run(eval, s, c, eval.bits[i] - 1, limit);
+                trial.run(eval, s, c, eval.bits[i] - 1, limit, None);
                 if trial.worst <= limit {
                     trial.commit(eval);
                     changed = true;
@@ -390,7 +390,14 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true).unwrap();
     let measure = |e: &Eval, s: usize, c: usize| -> u32 {
         let mut t = super::trial::Trial::new();
-        t.run(e, s, c, e.bits[s * nc + c].saturating_sub(2), f32::INFINITY);
+        t.run(
+            e,
+            s,
+            c,
+            e.bits[s * nc + c].saturating_sub(2),
+            f32::INFINITY,
+            None,
+        );
         t.worst.to_bits()
     };
     let (mut apart, mut near_differ) = (0, 0);
@@ -405,6 +412,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
                 c1,
                 after.bits[s1 * nc + c1].saturating_sub(2),
                 f32::INFINITY,
+                None,
             );
             t.commit(&mut after);
             let before = Eval::new(&ctx, &layout, &work, bits.clone(), true);

@@ -28,8 +28,8 @@ pub(super) struct Trial {
     key0: usize,
     nk: usize,
     nsub: usize,
-    /// Keys of the segment requantized so far (each once, in order; a time reads only those).
-    done: usize,
+    /// Per segment key: requantized (each key once; a time reads only requantized keys).
+    key_done: Vec<bool>,
     /// Per segment key: how many subtree joints (the first ones, in order) were requantized at it
     /// (a rotation's change stops where a joint's rotation does not change: nothing below does).
     reached: Vec<usize>,
@@ -55,6 +55,9 @@ pub(super) struct Trial {
     /// The largest ratio of error to limit over the joints and times that changed, or infinity
     /// when one exceeded the cap (the trial then stopped there).
     pub(super) worst: f32,
+    /// Where a failed trial stopped: the position of that time among the segment's source times
+    /// (`usize::MAX` when it was not one time's first measurement).
+    pub(super) failed_at: usize,
 }
 
 impl Trial {
@@ -74,7 +77,7 @@ impl Trial {
             key0: 0,
             nk: 0,
             nsub: 0,
-            done: 0,
+            key_done: Vec::new(),
             reached: Vec::new(),
             qi: Vec::new(),
             dec: Vec::new(),
@@ -88,11 +91,14 @@ impl Trial {
             moved: Vec::new(),
             seen: Vec::new(),
             worst: 0.0,
+            failed_at: usize::MAX,
         }
     }
 
     /// Works out setting component `c` of segment `s` to `bits` on `e` (see the module docs) and
     /// sets [`Trial::worst`]. As soon as one ratio exceeds `cap` it stops: `worst` is infinity.
+    /// `probe`: a time (position among the segment's source times) to measure first, where an
+    /// earlier trial of this component and segment failed; the result does not depend on it.
     ///
     /// The result is that of requantizing the whole segment and then measuring every time, every
     /// joint that moved (a joint whose values changed anywhere in the segment, or below one):
@@ -100,7 +106,15 @@ impl Trial {
     ///   moved by then is computed as the whole pass computes it (its values there are final);
     /// - a joint that moves only through later keys keeps its values at that time (the keys it reads
     ///   there did not change), so its error there is the one it had: measured after the segment.
-    pub(super) fn run(&mut self, e: &Eval, s: usize, c: usize, bits: u8, cap: f32) {
+    pub(super) fn run(
+        &mut self,
+        e: &Eval,
+        s: usize,
+        c: usize,
+        bits: u8,
+        cap: f32,
+        probe: Option<usize>,
+    ) {
         let keys = e.layout.seg_keys(s);
         let j = e.joint[e.layout.comps[c].track];
         let joints = &e.subtree[j];
@@ -120,7 +134,7 @@ impl Trial {
         for v in [&mut self.raw, &mut self.key_rot] {
             grow(v, self.nsub * self.nk, Quat::IDENTITY);
         }
-        self.done = 0;
+        reset(&mut self.key_done, self.nk, false);
         reset(&mut self.reached, self.nk, 0);
         let poses = times.len() * self.nsub;
         for v in [&mut self.local_aff, &mut self.model] {
@@ -132,22 +146,53 @@ impl Trial {
         reset(&mut self.dirty, self.nsub, false);
         reset(&mut self.moved, self.nsub, false);
         let nsub = self.nsub;
-        let mut next = keys.start;
         let mut worst = 0.0f32;
         let mut failed = false;
-        'times: for (pos, &i) in times.iter().enumerate() {
+        self.failed_at = usize::MAX;
+        // The keys time `i` reads inside the segment.
+        let reads = |i: usize| {
             let (k0, k1, a) = e.at[i];
-            let mut need = next;
-            if keys.contains(&k0) {
-                need = need.max(k0 + 1);
+            [Some(k0), (a != 0.0).then_some(k1)]
+                .into_iter()
+                .flatten()
+                .filter(|k| keys.contains(k))
+        };
+        // The probe: the time where this component of this segment failed last, measured first
+        // with only the keys it reads. Its joints' values there are final (a key's quantization
+        // does not depend on other keys), so if it fails the trial fails; if it passes, the
+        // times are measured in order as usual, the probe's counting as measured.
+        let probe = probe.filter(|&p| p < times.len());
+        if let Some(p) = probe {
+            let i = times[p];
+            for k in reads(i) {
+                self.requantize_once(e, k);
             }
-            if a != 0.0 && keys.contains(&k1) {
-                need = need.max(k1 + 1);
+            self.resample(e, p, i);
+            for (n, &d) in joints.iter().enumerate() {
+                if !self.moved[n] {
+                    continue;
+                }
+                self.seen[p * nsub + n] = true;
+                let r = e.error_at(i, d, &self.model_of(e, p, i, n, d)) / e.ctx.limits[d];
+                if exceeds(r, cap) {
+                    self.failed_at = p;
+                    self.worst = f32::INFINITY;
+                    return;
+                }
+                worst = worst.max(r);
             }
+        }
+        // Keys go in order: a time is measured once every key up to the last it reads is done
+        // (the joints that moved by then are the ones a whole pass would compute there).
+        let mut next = keys.start;
+        'times: for (pos, &i) in times.iter().enumerate() {
+            let need = reads(i).map(|k| k + 1).max().unwrap_or(next).max(next);
             while next < need {
-                self.requantize(e, next);
+                self.requantize_once(e, next);
                 next += 1;
-                self.done = next - keys.start;
+            }
+            if probe == Some(pos) {
+                continue;
             }
             self.resample(e, pos, i);
             for (n, &d) in joints.iter().enumerate() {
@@ -158,6 +203,7 @@ impl Trial {
                 let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
                 if exceeds(r, cap) {
                     failed = true;
+                    self.failed_at = pos;
                     break 'times;
                 }
                 worst = worst.max(r);
@@ -165,9 +211,8 @@ impl Trial {
         }
         if !failed {
             while next < keys.end {
-                self.requantize(e, next);
+                self.requantize_once(e, next);
                 next += 1;
-                self.done = next - keys.start;
             }
             let parents = &e.subtree_parent[j];
             'late: for (pos, &i) in times.iter().enumerate() {
@@ -197,12 +242,12 @@ impl Trial {
         e.params[self.s * nc + self.c] = self.quant;
         let joints = std::mem::take(&mut e.subtree[self.j]);
         if !self.rot {
-            for kk in 0..self.done {
+            for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
                 e.qi[self.c][self.key0 + kk] = self.qi[kk];
                 e.dec[self.c][self.key0 + kk] = self.dec[kk];
             }
         }
-        for kk in 0..self.done.min(self.nk) {
+        for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
             let k = self.key0 + kk;
             for (n, &d) in joints.iter().enumerate().take(self.reached[kk]) {
                 let at = n * self.nk + kk;
@@ -258,8 +303,17 @@ impl Trial {
     /// it.
     fn raw_of(&self, e: &Eval, n: usize, ri: usize, k: usize) -> Quat {
         match self.in_segment(k) {
-            Some(kk) if kk < self.done && n < self.reached[kk] => self.raw[n * self.nk + kk],
+            Some(kk) if self.key_done[kk] && n < self.reached[kk] => self.raw[n * self.nk + kk],
             _ => e.raw[ri][k],
+        }
+    }
+
+    /// [`Trial::requantize`] unless key `k` was requantized already.
+    fn requantize_once(&mut self, e: &Eval, k: usize) {
+        let kk = k - self.key0;
+        if !self.key_done[kk] {
+            self.requantize(e, k);
+            self.key_done[kk] = true;
         }
     }
 
@@ -357,7 +411,7 @@ impl Trial {
                         i,
                         e.base[d],
                         |x, k| match self.in_segment(k).filter(|_| x == self.c) {
-                            Some(kk) if kk < self.done => self.dec[kk],
+                            Some(kk) if self.key_done[kk] => self.dec[kk],
                             _ => e.dec[x][k],
                         },
                         |ri, k| e.raw[ri][k],

@@ -46,7 +46,8 @@
 //!   requantizes only its segment's keys of the joint's subtree, and re-measures only the source
 //!   times that read the segment, time by time as its keys are requantized, stopping at the first
 //!   time over the round's threshold (a failed try costs a fraction of a full one; the decision is
-//!   the one a whole pass would make). First-width checks likewise quantize keys as the times reach
+//!   the one a whole pass would make); the time where a component's try last failed in a segment
+//!   is measured first next time. First-width checks likewise quantize keys as the times reach
 //!   them.
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and the refinements of the best

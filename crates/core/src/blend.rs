@@ -711,38 +711,36 @@ mod tests {
         }
     }
 
-    #[test]
-    fn blend_matches_the_per_joint_reference_bit_for_bit() {
-        let mut seed = 0x9e37_79b9u32;
-        let mut next = move || {
+    /// A pseudo-random stream in [-1, 1) (xorshift), from `seed`.
+    fn stream(mut seed: u32) -> impl FnMut() -> f32 {
+        move || {
             seed ^= seed << 13;
             seed ^= seed >> 17;
             seed ^= seed << 5;
             (seed >> 8) as f32 / (1u32 << 23) as f32 - 1.0
-        };
-        let bits = |t: &[Transform]| -> Vec<u32> {
-            t.iter()
-                .flat_map(|t| {
-                    let mut v = t.translation.to_array().to_vec();
-                    v.extend(t.rotation.to_array());
-                    v.extend(t.scale.to_array());
-                    v
-                })
-                .map(f32::to_bits)
-                .collect()
-        };
+        }
+    }
+
+    use crate::transform::transform_bits as bits;
+
+    /// `n` transforms of random translation, rotation (not unit) and positive scale.
+    fn random_pose(next: &mut impl FnMut() -> f32, n: usize) -> Vec<Transform> {
+        (0..n)
+            .map(|_| {
+                Transform::new(
+                    Vec3::new(next(), next(), next()) * 10.0,
+                    Quat::from_xyzw(next(), next(), next(), next()),
+                    Vec3::new(next(), next(), next()) + 1.5,
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn blend_matches_the_per_joint_reference_bit_for_bit() {
+        let mut next = stream(0x9e37_79b9);
         for n in [1, 3, 4, 5, 8, 23, 40] {
-            let mut pose = || -> Vec<Transform> {
-                (0..n)
-                    .map(|_| {
-                        Transform::new(
-                            Vec3::new(next(), next(), next()) * 10.0,
-                            Quat::from_xyzw(next(), next(), next(), next()),
-                            Vec3::new(next(), next(), next()) + 1.5,
-                        )
-                    })
-                    .collect()
-            };
+            let mut pose = || random_pose(&mut next, n);
             let (bind, mut p1, p2, mut p3) = (pose(), pose(), pose(), pose());
             // Values the blend must never read: a joint masked to 0, a joint a layer does not drive.
             p1[0].translation.x = f32::NAN;
@@ -798,36 +796,9 @@ mod tests {
 
     #[test]
     fn block_layers_give_the_transform_layers_bits() {
-        let mut seed = 0x1234_5678u32;
-        let mut next = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 17;
-            seed ^= seed << 5;
-            (seed >> 8) as f32 / (1u32 << 23) as f32 - 1.0
-        };
-        let bits = |t: &[Transform]| -> Vec<u32> {
-            t.iter()
-                .flat_map(|t| {
-                    let mut v = t.translation.to_array().to_vec();
-                    v.extend(t.rotation.to_array());
-                    v.extend(t.scale.to_array());
-                    v
-                })
-                .map(f32::to_bits)
-                .collect()
-        };
+        let mut next = stream(0x1234_5678);
         for n in [1, 4, 5, 23, 40] {
-            let mut pose = || -> Vec<Transform> {
-                (0..n)
-                    .map(|_| {
-                        Transform::new(
-                            Vec3::new(next(), next(), next()) * 10.0,
-                            Quat::from_xyzw(next(), next(), next(), next()),
-                            Vec3::new(next(), next(), next()) + 1.5,
-                        )
-                    })
-                    .collect()
-            };
+            let mut pose = || random_pose(&mut next, n);
             let (bind, p1, p2) = (pose(), pose(), pose());
             let levels = [0.0, 0.25, 1.0, 0.7, 0.5, 1.0, f32::NAN, 0.0];
             let m1: Vec<f32> = (0..n).map(|j| levels[j % 8]).collect();

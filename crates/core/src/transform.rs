@@ -115,6 +115,20 @@ impl Transform {
     }
 }
 
+/// Every float of `t` (translation, rotation, scale), as bits: what the crate's tests compare.
+#[cfg(test)]
+pub(crate) fn transform_bits(t: &[Transform]) -> Vec<u32> {
+    t.iter()
+        .flat_map(|t| {
+            let mut v = t.translation.to_array().to_vec();
+            v.extend(t.rotation.to_array());
+            v.extend(t.scale.to_array());
+            v
+        })
+        .map(f32::to_bits)
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -272,17 +272,7 @@ fn reference(clip: &Clip, b: &ClipBinding, sk: &Skeleton, t: f32, out: &mut [Tra
     }
 }
 
-fn bits(p: &[Transform]) -> Vec<u32> {
-    p.iter()
-        .flat_map(|t| {
-            let mut v = t.translation.to_array().to_vec();
-            v.extend(t.rotation.to_array());
-            v.extend(t.scale.to_array());
-            v
-        })
-        .map(f32::to_bits)
-        .collect()
-}
+use crate::transform::transform_bits as bits;
 
 /// A compressed clip built by hand: root translation (3 components), arm rotation (3) and arm scale
 /// (3), 5 keys in segments of 2, pseudo-random quantized values.

@@ -187,6 +187,24 @@ fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
     assert!(range(&split) < 0.5 * range(&largest));
 }
 
+/// `clip` compressed with `options` on pools of 1, 2 and 3 threads.
+fn on_1_2_3_threads(
+    clip: &Clip,
+    skeleton: &Skeleton,
+    options: &CompressOptions,
+) -> Vec<(Clip, ClipCompressionReport)> {
+    [1, 2, 3]
+        .into_iter()
+        .map(|threads| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| compress_clip(clip, Some(skeleton), options))
+        })
+        .collect()
+}
+
 #[test]
 fn the_same_clip_compresses_to_the_same_bytes_at_any_thread_count_and_effort() {
     // Layouts, key reductions, first-width rungs and refinements run in parallel; the result
@@ -200,16 +218,7 @@ fn the_same_clip_compresses_to_the_same_bytes_at_any_thread_count_and_effort() {
             effort,
             ..CompressOptions::peers()
         };
-        let runs: Vec<(Clip, ClipCompressionReport)> = [1, 2, 3]
-            .into_iter()
-            .map(|threads| {
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
-                pool.install(|| compress_clip(&clip, Some(&skeleton), &options))
-            })
-            .collect();
+        let runs = on_1_2_3_threads(&clip, &skeleton, &options);
         assert!(runs[0].0.is_compressed(), "{effort:?}");
         assert!(runs[0].1.max_error <= 0.001, "{effort:?}: {:?}", runs[0].1);
         for r in &runs[1..] {
@@ -336,13 +345,19 @@ fn descend_one_at_a_time(eval: &mut Eval) {
     }
 }
 
+/// A moving, swinging chain of `joints` joints with `keys` keys: its source clip and rig.
+fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
+    let skeleton = chain(joints, 0.35);
+    let source = swing_moving(&skeleton, keys, true).to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    (source, rig)
+}
+
 #[test]
 fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
     // Six joints whose root also moves, 200 keys: 13 segments of 16, so that each wavefront
     // holds several tries (translations and rotations, whole subtrees under compensation).
-    let skeleton = chain(6, 0.35);
-    let source = swing_moving(&skeleton, 200, true).to_plain();
-    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let (source, rig) = moving_chain(6, 200);
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
@@ -378,9 +393,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     // more away reads, so the second try measures the same, bit for bit, before and after the
     // first is committed. Tries on neighbouring segments do see each other (so that this test
     // can tell).
-    let skeleton = chain(5, 0.35);
-    let source = swing_moving(&skeleton, 120, true).to_plain();
-    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let (source, rig) = moving_chain(5, 120);
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     let layout = Layout::new(&work, &rig, 16, true);
@@ -441,16 +454,7 @@ fn a_long_clip_refined_alone_compresses_to_the_same_bytes_at_any_thread_count() 
     let skeleton = chain(6, 0.3);
     let clip = swing_moving(&skeleton, 3400, true);
     assert!(clip.times().len() * skeleton.len() > LARGE_CLIP);
-    let runs: Vec<(Clip, ClipCompressionReport)> = [1, 2, 3]
-        .into_iter()
-        .map(|threads| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| compress_clip(&clip, Some(&skeleton), &CompressOptions::peers()))
-        })
-        .collect();
+    let runs = on_1_2_3_threads(&clip, &skeleton, &CompressOptions::peers());
     assert!(runs[0].0.is_compressed());
     assert!(runs[0].1.max_error <= 0.001, "{:?}", runs[0].1);
     for r in &runs[1..] {

@@ -167,25 +167,19 @@ impl Trial {
             for k in reads(i) {
                 self.requantize_once(e, k);
             }
-            self.resample(e, p, i);
-            for (n, &d) in joints.iter().enumerate() {
-                if !self.moved[n] {
-                    continue;
-                }
-                self.seen[p * nsub + n] = true;
-                let r = e.error_at(i, d, &self.model_of(e, p, i, n, d)) / e.ctx.limits[d];
-                if exceeds(r, cap) {
+            match self.measure_time(e, p, i, cap) {
+                Some(r) => worst = worst.max(r),
+                None => {
                     self.failed_at = p;
                     self.worst = f32::INFINITY;
                     return;
                 }
-                worst = worst.max(r);
             }
         }
         // Keys go in order: a time is measured once every key up to the last it reads is done
         // (the joints that moved by then are the ones a whole pass would compute there).
         let mut next = keys.start;
-        'times: for (pos, &i) in times.iter().enumerate() {
+        for (pos, &i) in times.iter().enumerate() {
             let need = reads(i).map(|k| k + 1).max().unwrap_or(next).max(next);
             while next < need {
                 self.requantize_once(e, next);
@@ -194,19 +188,13 @@ impl Trial {
             if probe == Some(pos) {
                 continue;
             }
-            self.resample(e, pos, i);
-            for (n, &d) in joints.iter().enumerate() {
-                if !self.moved[n] {
-                    continue;
-                }
-                self.seen[pos * nsub + n] = true;
-                let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
-                if exceeds(r, cap) {
+            match self.measure_time(e, pos, i, cap) {
+                Some(r) => worst = worst.max(r),
+                None => {
                     failed = true;
                     self.failed_at = pos;
-                    break 'times;
+                    break;
                 }
-                worst = worst.max(r);
             }
         }
         if !failed {
@@ -232,6 +220,25 @@ impl Trial {
             }
         }
         self.worst = if failed { f32::INFINITY } else { worst };
+    }
+
+    /// Resamples the subtree at the segment's time `pos` (source time `i`) and measures the joints
+    /// that moved: the largest ratio of error to limit, or `None` at the first over `cap`.
+    fn measure_time(&mut self, e: &Eval, pos: usize, i: usize, cap: f32) -> Option<f32> {
+        self.resample(e, pos, i);
+        let mut worst = 0.0f32;
+        for (n, &d) in e.subtree[self.j].iter().enumerate() {
+            if !self.moved[n] {
+                continue;
+            }
+            self.seen[pos * self.nsub + n] = true;
+            let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
+            if exceeds(r, cap) {
+                return None;
+            }
+            worst = worst.max(r);
+        }
+        Some(worst)
     }
 
     /// Writes the trial's changes into `e` (the state it was run on, unchanged since).

@@ -200,12 +200,7 @@ fn compressed_clip_round_trips_and_header_says_1_5() {
     assert_eq!(bytes[tt + 5], 3 << 2 | 3 << 4);
     // The segment entries sit where docs/format.md says, and decode to the clip's.
     let parts = c.quantized_parts().unwrap();
-    let entries: Vec<(u8, u8, u8)> = parts
-        .segments
-        .iter()
-        .map(|e| (e.bits, e.min, e.extent))
-        .collect();
-    assert_eq!(packed_segments(&bytes, &c), entries);
+    assert_eq!(packed_segments(&bytes, &c), segment_entries(&c));
     // Then the rotation index table: one byte per segment and rotation, each 0-3 or 255.
     let rotations = rotation_components(&c).iter().filter(|&&r| r).count() / 3;
     assert_eq!(rotations, 2);
@@ -310,6 +305,18 @@ fn packed_segments(bytes: &[u8], c: &Clip) -> Vec<(u8, u8, u8)> {
         .collect()
 }
 
+/// The clip's segment entries as (bits, start, length).
+fn segment_entries(c: &Clip) -> Vec<(u8, u8, u8)> {
+    c.quantized_parts()
+        .map(|p| {
+            p.segments
+                .iter()
+                .map(|e| (e.bits, e.min, e.extent))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// Bytes of the packed segment block, padding included.
 fn packed_segments_len(bytes: &[u8], c: &Clip) -> usize {
     let rec = clip_record_offset(bytes);
@@ -383,12 +390,7 @@ fn a_clip_of_several_segments_stores_its_sub_ranges() {
     let rec = clip_record_offset(&bytes);
     let flags = u32::from_le_bytes(bytes[rec + 4..rec + 8].try_into().unwrap());
     assert_eq!(flags & (64 | 128), 64);
-    let entries: Vec<(u8, u8, u8)> = parts
-        .segments
-        .iter()
-        .map(|e| (e.bits, e.min, e.extent))
-        .collect();
-    assert_eq!(packed_segments(&bytes, &c), entries);
+    assert_eq!(packed_segments(&bytes, &c), segment_entries(&c));
     assert_eq!(format::read(&bytes).unwrap().clips[0], c);
     // And in the 1.4 layout, three bytes per entry.
     assert_eq!(format::read(&to_1_4(&bytes, &c)).unwrap().clips[0], c);

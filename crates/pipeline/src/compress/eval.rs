@@ -116,9 +116,6 @@ pub(super) struct Eval<'a> {
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
     pub(super) seg_times: Vec<Vec<usize>>,
-    /// Per joint, while building: its stored values changed / its model transforms changed.
-    pub(super) dirty: Vec<bool>,
-    pub(super) moved: Vec<bool>,
 }
 
 impl<'a> Eval<'a> {
@@ -233,8 +230,6 @@ impl<'a> Eval<'a> {
             parents: (0..nj)
                 .map(|j| parents.get(j).copied().flatten().map(usize::from))
                 .collect(),
-            dirty: vec![true; nj],
-            moved: vec![true; nj],
             at,
             key_src,
             joint,
@@ -253,9 +248,6 @@ impl<'a> Eval<'a> {
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
         };
-        let all: Vec<usize> = (0..nj).collect();
-        e.dirty.fill(true);
-        e.moved.fill(true);
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
         let seg_len = layout.seg_len.max(1);
@@ -264,16 +256,16 @@ impl<'a> Eval<'a> {
             let (k0, k1, a) = e.at[i];
             let need = if a != 0.0 { k0.max(k1) } else { k0 } + 1;
             while next < need.min(n) {
-                e.requantize_key(next / seg_len, next, &all);
+                e.requantize_key(next / seg_len, next);
                 next += 1;
             }
-            e.resample(i, &all);
+            e.resample(i);
             if check && (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j])) {
                 return (e, false);
             }
         }
         while next < n {
-            e.requantize_key(next / seg_len, next, &all);
+            e.requantize_key(next / seg_len, next);
             next += 1;
         }
         (e, true)
@@ -294,13 +286,11 @@ impl<'a> Eval<'a> {
         self.parents.get(j).copied().flatten()
     }
 
-    /// Quantizes key `k` of segment `s` for `joints` (all joints, in skeleton order), every
-    /// component, and sets `dirty`. Keys of a segment are done in order; `dirty` is only ever set
-    /// here, the caller clears it. (A change of one component is worked out by
-    /// [`super::trial::Trial`].)
-    pub(super) fn requantize_key(&mut self, s: usize, k: usize, joints: &[usize]) {
+    /// Quantizes key `k` of segment `s`: every component of every joint, parents first. (A change
+    /// of one component is worked out by [`super::trial::Trial`].)
+    pub(super) fn requantize_key(&mut self, s: usize, k: usize) {
         let nc = self.layout.comps.len();
-        for &d in joints {
+        for d in 0..self.nj {
             let pr = self
                 .parent(d)
                 .map_or(Quat::IDENTITY, |p| self.key_rot[k * self.nj + p]);
@@ -310,7 +300,7 @@ impl<'a> Eval<'a> {
                 for c0 in [ft, fs].into_iter().flatten() {
                     for c in c0..c0 + 3 {
                         let v = self.layout.comps[c].vals[k];
-                        self.dirty[d] |= self.store(s, c, k, v, nc);
+                        self.store(s, c, k, v, nc);
                     }
                 }
                 if let Some(c0) = fr {
@@ -318,7 +308,7 @@ impl<'a> Eval<'a> {
                     let index = self.layout.index[ri][k];
                     let vals = self.rotation_values(d, c0, k, pr);
                     for (a, v) in vals.into_iter().enumerate() {
-                        self.dirty[d] |= self.store(s, c0 + a, k, v, nc);
+                        self.store(s, c0 + a, k, v, nc);
                     }
                     let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
                     let raw = raw_rotation(index, q);
@@ -344,36 +334,24 @@ impl<'a> Eval<'a> {
         }
     }
 
-    /// Quantizes `v` as component `c` of key `k` (in segment `s`); returns whether the stored
-    /// value changed.
-    pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) -> bool {
+    /// Quantizes `v` as component `c` of key `k` (in segment `s`).
+    pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) {
         let (q, x) = self.params[s * nc + c].quantize(v);
-        let changed = q != self.qi[c][k] || x.to_bits() != self.dec[c][k].to_bits();
-        if changed {
-            self.qi[c][k] = q;
-            self.dec[c][k] = x;
-        }
-        changed
+        self.qi[c][k] = q;
+        self.dec[c][k] = x;
     }
 
-    /// Recomputes the local poses (of dirty joints) and model transforms (of joints that moved:
-    /// dirty, or below a dirty joint) of `joints` at source time `i`; sets `moved`.
-    pub(super) fn resample(&mut self, i: usize, joints: &[usize]) {
-        for (n, &d) in joints.iter().enumerate() {
-            let parent = self.parent(d);
-            let below = n > 0 && parent.is_some_and(|p| self.moved[p]);
-            self.moved[d] = self.dirty[d] || below;
-            if !self.moved[d] {
-                continue;
-            }
-            if self.dirty[d] {
-                let local = match self.track_of[d] {
-                    Some(tr) => self.sampled(tr, i, self.base[d]),
-                    None => self.base[d],
-                };
-                self.local_aff[i * self.nj + d] = local.to_affine();
-            }
-            let pm = parent.map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
+    /// Computes every joint's local pose and model transform at source time `i` (parents first).
+    pub(super) fn resample(&mut self, i: usize) {
+        for d in 0..self.nj {
+            let local = match self.track_of[d] {
+                Some(tr) => self.sampled(tr, i, self.base[d]),
+                None => self.base[d],
+            };
+            self.local_aff[i * self.nj + d] = local.to_affine();
+            let pm = self
+                .parent(d)
+                .map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
             self.model[i * self.nj + d] = pm * self.local_aff[i * self.nj + d];
         }
     }

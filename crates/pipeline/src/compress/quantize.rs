@@ -86,7 +86,7 @@ pub(super) struct Layout {
 }
 
 /// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 pub(super) struct Quant {
     pub(super) scale: f32,
     pub(super) bias: f32,

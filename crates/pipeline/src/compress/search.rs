@@ -108,7 +108,7 @@ pub(super) fn descend(eval: &mut Eval, par: bool) {
     let mut probes = vec![usize::MAX; nc * segs];
     let steps = 2 * (nc - 1) + segs;
     let mut trials: Vec<Trial> = (0..segs.div_ceil(2).min(nc))
-        .map(|_| Trial::new())
+        .map(|_| Trial::default())
         .collect();
     let mut items: Vec<(usize, usize)> = Vec::new();
     let mut round = 0;
@@ -127,7 +127,7 @@ pub(super) fn descend(eval: &mut Eval, par: bool) {
                 }
             }
             while trials.len() < items.len() {
-                trials.push(Trial::new());
+                trials.push(Trial::default());
             }
             let (e, hints): (&Eval, &[usize]) = (eval, &probes);
             let run = |(&(c, s), t): (&(usize, usize), &mut Trial)| {

@@ -318,7 +318,7 @@ fn descend_one_at_a_time(eval: &mut Eval) {
     let nc = eval.layout.comps.len();
     let segs = eval.layout.seg_count;
     let mut blocked = vec![false; nc * segs];
-    let mut trial = super::trial::Trial::new();
+    let mut trial = super::trial::Trial::default();
     let mut round = 0;
     loop {
         let limit = THRESHOLDS.get(round).copied().unwrap_or(1.0);
@@ -402,7 +402,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     assert_eq!(segs, 8);
     let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true).unwrap();
     let measure = |e: &Eval, s: usize, c: usize| -> u32 {
-        let mut t = super::trial::Trial::new();
+        let mut t = super::trial::Trial::default();
         t.run(
             e,
             s,
@@ -418,7 +418,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     for c1 in [0, 3, nc - 1] {
         for s1 in 0..segs {
             let mut after = Eval::new(&ctx, &layout, &work, bits.clone(), true);
-            let mut t = super::trial::Trial::new();
+            let mut t = super::trial::Trial::default();
             t.run(
                 &after,
                 s1,

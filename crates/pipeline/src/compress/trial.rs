@@ -15,7 +15,8 @@ use super::quantize::{raw_rotation, Kind, Quant};
 use sinew_core::clip::normalize_rotation;
 use sinew_core::glam::{Affine3A, Quat};
 
-/// The buffers of one tentative change (reused from trial to trial).
+/// The buffers of one tentative change (reused from trial to trial; `Default`: empty).
+#[derive(Default)]
 pub(super) struct Trial {
     s: usize,
     c: usize,
@@ -61,40 +62,6 @@ pub(super) struct Trial {
 }
 
 impl Trial {
-    /// Empty buffers.
-    pub(super) fn new() -> Trial {
-        Trial {
-            s: 0,
-            c: 0,
-            bits: 0,
-            quant: Quant {
-                scale: 0.0,
-                bias: 0.0,
-                top: 0,
-            },
-            j: 0,
-            rot: false,
-            key0: 0,
-            nk: 0,
-            nsub: 0,
-            key_done: Vec::new(),
-            reached: Vec::new(),
-            qi: Vec::new(),
-            dec: Vec::new(),
-            raw: Vec::new(),
-            key_rot: Vec::new(),
-            local_aff: Vec::new(),
-            local_set: Vec::new(),
-            model: Vec::new(),
-            model_set: Vec::new(),
-            dirty: Vec::new(),
-            moved: Vec::new(),
-            seen: Vec::new(),
-            worst: 0.0,
-            failed_at: usize::MAX,
-        }
-    }
-
     /// Works out setting component `c` of segment `s` to `bits` on `e` (see the module docs) and
     /// sets [`Trial::worst`]. As soon as one ratio exceeds `cap` it stops: `worst` is infinity.
     /// `probe`: a time (position among the segment's source times) to measure first, where an

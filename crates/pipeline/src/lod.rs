@@ -22,14 +22,16 @@
 //!
 //! meshoptimizer passes indices to C++ unchecked, so every buffer is validated before each call.
 
-use crate::surface::{farthest, sample_points, used_vertices, TriangleGrid};
+use crate::lod_parts::position_ids;
+use crate::surface::{
+    beyond_and_farthest, farthest_above, sample_points, used_vertices, TriangleGrid,
+};
 use meshopt::{SimplifyOptions, SimplifyVertex};
 use rayon::prelude::*;
 use sinew_core::glam;
 use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, Scene};
-use std::collections::{HashMap, HashSet};
 
 /// A LOD's reported error is at least its measured distance to LOD 0 times this margin: the larger
 /// of the distance from LOD 0's vertices to the LOD's surface and from the LOD's vertices, centroids
@@ -300,50 +302,47 @@ fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
 ///   `Permissive`: UV seams, skin seams and whatever it locks for topology stay as they were. Without
 ///   `Permissive`, `Protect` changes nothing.
 fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
-    let key = |p: glam::Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-    let mut owner: HashMap<[u32; 3], usize> = HashMap::new();
-    let mut shared: HashSet<[u32; 3]> = HashSet::new();
+    const NO_OWNER: u32 = u32::MAX;
+    let (count, id_of) = position_ids(&lod.positions);
+    // Per position: the first submesh using it, and whether another submesh uses it too.
+    let mut owner = vec![NO_OWNER; count];
+    let mut shared = vec![false; count];
     for (s, sub) in lod.submeshes.iter().enumerate() {
         let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
         for &i in &lod.indices[range] {
-            let k = key(lod.positions[i as usize]);
-            match owner.get(&k) {
-                Some(&o) if o != s => {
-                    shared.insert(k);
-                }
-                Some(_) => {}
-                None => {
-                    owner.insert(k, s);
-                }
+            let id = id_of[i as usize] as usize;
+            if owner[id] == NO_OWNER {
+                owner[id] = s as u32;
+            } else if owner[id] != s as u32 {
+                shared[id] = true;
             }
         }
     }
-    // Per position: its first vertex, and whether a later vertex there has the same UV and skin
-    // (a hard normal edge, opened) or not (a UV or skin seam, kept).
-    let mut first: HashMap<[u32; 3], usize> = HashMap::new();
-    let mut hard_edge: HashMap<[u32; 3], bool> = HashMap::new();
-    for (v, p) in lod.positions.iter().enumerate() {
-        let k = key(*p);
-        match first.get(&k) {
-            None => {
-                first.insert(k, v);
-            }
-            Some(&a) => {
-                let same = lod.uvs.get(a) == lod.uvs.get(v)
-                    && lod.joints.get(a) == lod.joints.get(v)
-                    && lod.weights.get(a) == lod.weights.get(v);
-                let open = hard_edge.entry(k).or_insert(true);
-                *open &= same;
-            }
+    // Per position: its first vertex, and whether every later vertex there has the same UV and
+    // skin (a hard normal edge, opened) or not (a UV or skin seam, kept). `None` while the position
+    // has one vertex.
+    let mut first = vec![u32::MAX; count];
+    let mut hard_edge: Vec<Option<bool>> = vec![None; count];
+    for (v, &id) in id_of.iter().enumerate() {
+        let id = id as usize;
+        if first[id] == u32::MAX {
+            first[id] = v as u32;
+            continue;
         }
+        let a = first[id] as usize;
+        let same = lod.uvs.get(a) == lod.uvs.get(v)
+            && lod.joints.get(a) == lod.joints.get(v)
+            && lod.weights.get(a) == lod.weights.get(v);
+        let open = hard_edge[id].get_or_insert(true);
+        *open &= same;
     }
-    lod.positions
+    id_of
         .iter()
-        .map(|p| {
-            let k = key(*p);
-            if shared.contains(&k) {
+        .map(|&id| {
+            let id = id as usize;
+            if shared[id] {
                 SimplifyVertex::Lock
-            } else if hard_edge.get(&k) == Some(&true) {
+            } else if hard_edge[id] == Some(true) {
                 SimplifyVertex::None
             } else {
                 SimplifyVertex::Protect
@@ -483,14 +482,14 @@ fn flat_soup(lod: &Lod) -> Lod {
 
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
 /// Returns the new LOD (compacted and optimised) and the relative error of this step.
-/// `keep`: positions (bit patterns) whose vertices are locked (the part extremes of LOD 0).
+/// `keep`: positions (bit patterns, sorted) whose vertices are locked (the part extremes of LOD 0).
 fn simplify_step(
     source: &Lod,
     skeleton: Option<&Skeleton>,
     target_triangles: usize,
     max_error: f32,
     tuning: &LodTuning,
-    keep: &HashSet<[u32; 3]>,
+    keep: &[[u32; 3]],
 ) -> (Lod, f32) {
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     let attrs = attributes(source, skeleton);
@@ -512,7 +511,10 @@ fn simplify_step(
     }
     let mut locks = vertex_flags(source);
     for (l, p) in locks.iter_mut().zip(&source.positions) {
-        if keep.contains(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]) {
+        if keep
+            .binary_search(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+            .is_ok()
+        {
             *l = SimplifyVertex::Lock;
         }
     }
@@ -727,6 +729,42 @@ pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
     Ok(())
 }
 
+/// The largest distance that cannot raise a reported error of `accumulated`: every distance `d` up
+/// to it gives `d / scale * MEASURE_MARGIN <= accumulated` in f32 (the same expression as the
+/// measurement's), so distance searches may stop at the first triangle that close with the same
+/// result. 0 when nothing can be skipped.
+fn irrelevant_below(accumulated: f32, scale: f32) -> f32 {
+    if !(scale > 0.0 && accumulated > 0.0 && accumulated.is_finite()) {
+        return 0.0;
+    }
+    // The neighbouring floats of a non-negative finite value (`f32::next_up` and `next_down` need
+    // Rust 1.86, past the workspace's MSRV).
+    let up = |d: f32| f32::from_bits(d.to_bits() + 1);
+    let down = |d: f32| f32::from_bits(d.to_bits() - 1);
+    let raises = |d: f32| d / scale * MEASURE_MARGIN > accumulated;
+    let mut floor = accumulated * scale / MEASURE_MARGIN;
+    if !floor.is_finite() {
+        return 0.0;
+    }
+    // Rounding puts the estimate a few ulps off; the expression is monotone in `d`, so step down
+    // until it does not raise the error and up while the next float does not either (a bounded
+    // number of steps: 0 is always a safe answer).
+    for _ in 0..64 {
+        if floor > 0.0 && raises(floor) {
+            floor = down(floor);
+        }
+    }
+    if raises(floor) {
+        return 0.0;
+    }
+    for _ in 0..64 {
+        if !raises(up(floor)) {
+            floor = up(floor);
+        }
+    }
+    floor.max(0.0)
+}
+
 /// Builds the LOD chain of one mesh from its geometry.
 pub fn build_lods(
     mesh: &Mesh,
@@ -776,7 +814,7 @@ pub fn build_lods_tuned(
     let base_tris = mesh.geometry.triangle_count();
     // Part extremes are found once, on LOD 0, and kept through the chain: a part simplified below
     // `lod_parts::SMALL_PART` triangles in one step must keep them in the next.
-    let keep: HashSet<[u32; 3]> = if tuning.lock_part_extremes {
+    let mut keep: Vec<[u32; 3]> = if tuning.lock_part_extremes {
         let g = &mesh.geometry;
         crate::lod_parts::part_extremes(&g.positions, &g.indices)
             .into_iter()
@@ -785,8 +823,10 @@ pub fn build_lods_tuned(
             .map(|(_, p)| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
             .collect()
     } else {
-        HashSet::new()
+        Vec::new()
     };
+    keep.sort_unstable();
+    keep.dedup();
     // The measured distance to LOD 0 is a floor under each reported error (see `MEASURE_MARGIN`).
     let base_grid = TriangleGrid::new(&mesh.geometry.positions, &mesh.geometry.indices);
     // LOD 0's vertices only: what simplification loses shows at the vertices it removed (on the
@@ -815,28 +855,42 @@ pub fn build_lods_tuned(
         // it can remove a shape feature while reporting a small error. LOD 0 vertices farther from
         // the result than that error (the 16 farthest at most) are locked and the step is built
         // again (zombie.ms3d's LOD 1: 2.725% of the diagonal before, 1.756% after; docs/lod.md).
+        let base_accum = if tuning.chain { accumulated } else { 0.0 };
+        // The grid of the step's result; `lost` is LOD 0's farthest vertex from it, as far as it
+        // can matter (`irrelevant_below`).
+        let mut lod_grid = TriangleGrid::new(&lod.positions, &lod.indices);
+        let mut lost = None;
         if tuning.repair_far_vertices {
-            let base_accum = if tuning.chain { accumulated } else { 0.0 };
             let threshold = (base_accum + step_error) * scale;
-            let grid = TriangleGrid::new(&lod.positions, &lod.indices);
             // Only distances above the threshold matter: the search may stop at the first
             // triangle within it (the kept distances are exact, the rest are dropped either way).
-            let mut far: Vec<(f32, [u32; 3])> = base_vertices
-                .iter()
-                .map(|&p| {
-                    (
-                        grid.distance_above(p, threshold),
-                        [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()],
-                    )
+            // The same pass finds the farthest vertex, which the measurement below needs when
+            // the step is kept.
+            let (beyond, largest) = beyond_and_farthest(
+                &base_vertices,
+                &lod_grid,
+                threshold,
+                irrelevant_below(base_accum + step_error, scale),
+            );
+            let mut far: Vec<(f32, [u32; 3])> = beyond
+                .into_iter()
+                .filter(|(_, d)| d.is_finite())
+                .map(|(i, d)| {
+                    let p = base_vertices[i];
+                    (d, [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
                 })
-                .filter(|(d, _)| d.is_finite() && *d > threshold)
                 .collect();
             far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
             far.truncate(REPAIR_VERTICES);
             if !far.is_empty() {
                 let mut more = keep.clone();
                 more.extend(far.iter().map(|f| f.1));
+                more.sort_unstable();
+                more.dedup();
                 (lod, step_error) = simplify_step(&welded, skeleton, target, budget, tuning, &more);
+                lod_grid = TriangleGrid::new(&lod.positions, &lod.indices);
+            } else {
+                lost = Some(largest);
             }
         }
         let mut lod = if flat { flat_soup(&lod) } else { lod };
@@ -848,9 +902,15 @@ pub fn build_lods_tuned(
         if k + 1 == options.ratios.len() && options.lowest_lod_influences < MAX_INFLUENCES {
             limit_influences(&mut lod, options.lowest_lod_influences);
         }
-        let lod_grid = TriangleGrid::new(&lod.positions, &lod.indices);
-        let lost = farthest(&base_vertices, &lod_grid);
-        let added = farthest(&sample_points(&lod.positions, &lod.indices), &base_grid);
+        // `flat_soup` and `limit_influences` keep every triangle's corners in place and in order,
+        // so `lod_grid` is the grid of `lod` as it is now.
+        let floor = irrelevant_below(accumulated, scale);
+        let lost = lost.unwrap_or_else(|| farthest_above(&base_vertices, &lod_grid, floor));
+        let added = farthest_above(
+            &sample_points(&lod.positions, &lod.indices),
+            &base_grid,
+            floor,
+        );
         let measured = if scale > 0.0 && lost.is_finite() {
             lost.max(added) / scale * MEASURE_MARGIN
         } else {
@@ -938,4 +998,112 @@ pub fn generate_mesh_lods(
         meshes.iter_mut().map(one).collect()
     };
     done.into_iter().collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use sinew_core::glam::{Vec2, Vec3};
+
+    #[test]
+    fn irrelevant_below_is_the_largest_distance_that_cannot_raise_the_error() {
+        let mut s = 0x9e37_79b9u32;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32
+        };
+        let mut tight = 0;
+        for _ in 0..10_000 {
+            let accumulated = rnd() * 0.05;
+            let scale = 0.01 + rnd() * 500.0;
+            let floor = irrelevant_below(accumulated, scale);
+            assert!(floor > 0.0, "{accumulated} {scale}");
+            assert!(floor / scale * MEASURE_MARGIN <= accumulated);
+            // The next float up would raise the error: the floor is as high as it can be.
+            let next = f32::from_bits(floor.to_bits() + 1);
+            assert!(next / scale * MEASURE_MARGIN > accumulated);
+            tight += 1;
+        }
+        assert_eq!(tight, 10_000);
+        assert_eq!(irrelevant_below(0.0, 2.0), 0.0);
+        assert_eq!(irrelevant_below(0.01, 0.0), 0.0);
+        assert_eq!(irrelevant_below(f32::NAN, 2.0), 0.0);
+        assert_eq!(irrelevant_below(f32::INFINITY, 2.0), 0.0);
+    }
+
+    /// Two quads side by side in two submeshes, sharing the middle edge's positions; the left
+    /// quad's right corners come twice: at the top with another normal only (a hard edge), at
+    /// the bottom with another UV (a seam).
+    #[test]
+    fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
+        let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+        let positions = vec![
+            p(0.0, 0.0), // 0
+            p(1.0, 0.0), // 1: border (both submeshes), bottom
+            p(1.0, 1.0), // 2: border, top
+            p(0.0, 1.0), // 3
+            p(2.0, 0.0), // 4
+            p(2.0, 1.0), // 5
+            p(1.0, 1.0), // 6: same position as 2, other normal only
+            p(1.0, 0.0), // 7: same position as 1, other UV
+            p(0.5, 0.5), // 8: alone at its position, different normal from nothing
+            p(0.5, 0.5), // 9: same as 8 with another normal (hard edge, one submesh)
+            p(0.0, 2.0), // 10: same UV as 11, different normal
+            p(0.0, 2.0), // 11
+            p(3.0, 0.0), // 12: seam inside the right submesh
+            p(3.0, 0.0), // 13
+        ];
+        let n = positions.len();
+        let mut normals = vec![Vec3::Z; n];
+        normals[6] = Vec3::X;
+        normals[9] = Vec3::X;
+        normals[11] = Vec3::Y;
+        let mut uvs = vec![Vec2::ZERO; n];
+        uvs[7] = Vec2::ONE;
+        uvs[13] = Vec2::ONE;
+        let indices = vec![
+            0, 1, 2, 0, 2, 3, 8, 9, 10, 10, 11, 3, 6, 7, 1, 4, 5, 7, 12, 13, 4,
+        ];
+        let lod = Lod {
+            positions,
+            normals,
+            uvs,
+            indices,
+            submeshes: vec![
+                Submesh {
+                    first_index: 0,
+                    index_count: 12,
+                    material: "left".into(),
+                },
+                Submesh {
+                    first_index: 12,
+                    index_count: 9,
+                    material: "right".into(),
+                },
+            ],
+            ..Lod::default()
+        };
+        const LOCK: SimplifyVertex = SimplifyVertex::Lock;
+        const OPEN: SimplifyVertex = SimplifyVertex::None;
+        const PROTECT: SimplifyVertex = SimplifyVertex::Protect;
+        let expected = vec![
+            PROTECT, // 0
+            LOCK,    // 1: used by both submeshes
+            LOCK,    // 2
+            PROTECT, // 3
+            PROTECT, // 4
+            PROTECT, // 5
+            LOCK,    // 6: its position is on the border
+            LOCK,    // 7
+            OPEN,    // 8: a hard normal edge
+            OPEN,    // 9
+            OPEN,    // 10
+            OPEN,    // 11
+            PROTECT, // 12: a UV seam
+            PROTECT, // 13
+        ];
+        assert_eq!(vertex_flags(&lod), expected);
+    }
 }

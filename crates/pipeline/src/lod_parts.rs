@@ -10,7 +10,21 @@
 //! simplifies.
 
 use sinew_core::glam::Vec3;
-use std::collections::HashMap;
+
+/// One id per distinct position (bit for bit, so -0.0 and 0.0 differ), numbered in order of first
+/// appearance: the number of ids and each vertex's id. meshoptimizer's hashed `generateVertexRemap`
+/// does the grouping (a SipHash map of the bit patterns took a third of the LOD builder's own time
+/// on CesiumMan).
+pub(crate) fn position_ids(positions: &[Vec3]) -> (usize, Vec<u32>) {
+    if positions.is_empty() {
+        return (0, Vec::new());
+    }
+    let keys: Vec<[u32; 3]> = positions
+        .iter()
+        .map(|p| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()])
+        .collect();
+    meshopt::generate_vertex_remap(&keys, None)
+}
 
 /// Parts with fewer triangles get no locks.
 const SMALL_PART: usize = 64;
@@ -21,18 +35,10 @@ const SMALL_PART: usize = 64;
 /// are the sets of triangles connected through shared positions (vertices split for UV or normal
 /// seams belong to one part). Indices must be valid for `positions`.
 pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
-    let key = |p: Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
-    // One id per distinct position, in order of first appearance.
-    let mut ids: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
-    let mut id_of = Vec::with_capacity(positions.len());
-    let mut at: Vec<Vec3> = Vec::new();
-    for &p in positions {
-        let next = at.len() as u32;
-        let id = *ids.entry(key(p)).or_insert(next);
-        if id == next {
-            at.push(p);
-        }
-        id_of.push(id);
+    let (count, id_of) = position_ids(positions);
+    let mut at: Vec<Vec3> = vec![Vec3::ZERO; count];
+    for (&id, &p) in id_of.iter().zip(positions) {
+        at[id as usize] = p;
     }
     let mut parent: Vec<u32> = (0..at.len() as u32).collect();
     fn root(parent: &mut [u32], mut x: u32) -> u32 {
@@ -58,14 +64,14 @@ pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
             }
         }
     }
-    // Per part (keyed by its root): the ids of the lowest and highest position on each axis.
-    let mut lo_hi: HashMap<u32, [u32; 6]> = HashMap::new();
+    // Per part (indexed by its root): the ids of the lowest and highest position on each axis.
+    let mut lo_hi: Vec<Option<[u32; 6]>> = vec![None; at.len()];
     for id in 0..at.len() as u32 {
         if !used[id as usize] {
             continue;
         }
         let r = root(&mut parent, id);
-        let e = lo_hi.entry(r).or_insert([id; 6]);
+        let e = lo_hi[r as usize].get_or_insert([id; 6]);
         let p = at[id as usize];
         for axis in 0..3 {
             // Ties keep the first id.
@@ -78,20 +84,20 @@ pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
         }
     }
     let mut locked = vec![false; at.len()];
-    let mut far: HashMap<u32, (f32, u32)> = HashMap::new();
+    let mut far: Vec<Option<(f32, u32)>> = vec![None; at.len()];
     for id in 0..at.len() as u32 {
         if !used[id as usize] {
             continue;
         }
         let r = root(&mut parent, id);
-        let Some(e) = lo_hi.get(&r) else { continue };
+        let Some(e) = lo_hi[r as usize] else { continue };
         let centre = Vec3::new(
             (at[e[0] as usize].x + at[e[1] as usize].x) * 0.5,
             (at[e[2] as usize].y + at[e[3] as usize].y) * 0.5,
             (at[e[4] as usize].z + at[e[5] as usize].z) * 0.5,
         );
         let d = at[id as usize].distance_squared(centre);
-        let f = far.entry(r).or_insert((d, id));
+        let f = far[r as usize].get_or_insert((d, id));
         if d > f.0 {
             *f = (d, id);
         }
@@ -99,20 +105,19 @@ pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
     // Triangles per part: small parts are left to meshoptimizer, so that a mesh of many small
     // pieces can still reach its targets (the biped fixture, 21 tubes of 36 triangles, stopped at
     // 0.34 of its triangles instead of 0.25 with seven locks per tube, and at 0.27 with two).
-    let mut tris: HashMap<u32, usize> = HashMap::new();
+    let mut tris = vec![0usize; at.len()];
     for t in indices.chunks_exact(3) {
-        *tris
-            .entry(root(&mut parent, id_of[t[0] as usize]))
-            .or_insert(0) += 1;
+        tris[root(&mut parent, id_of[t[0] as usize]) as usize] += 1;
     }
-    for (r, e) in &lo_hi {
-        if tris.get(r).copied().unwrap_or(0) < SMALL_PART {
+    for (r, e) in lo_hi.iter().enumerate() {
+        let Some(e) = e else { continue };
+        if tris[r] < SMALL_PART {
             continue;
         }
         for &id in e {
             locked[id as usize] = true;
         }
-        if let Some(&(_, id)) = far.get(r) {
+        if let Some((_, id)) = far[r] {
             locked[id as usize] = true;
         }
     }

@@ -304,14 +304,45 @@ pub fn one_sided(from: (&[Vec3], &[u32]), to: (&[Vec3], &[u32])) -> f32 {
 
 /// The largest distance from one of `points` to the grid's triangles.
 pub fn farthest(points: &[Vec3], grid: &TriangleGrid) -> f32 {
+    farthest_above(points, grid, 0.0)
+}
+
+/// [`farthest`] when it is above `floor`; otherwise `floor` (a caller to whom distances up to
+/// `floor` make no difference lets most points stop at their first triangle within it).
+pub fn farthest_above(points: &[Vec3], grid: &TriangleGrid, floor: f32) -> f32 {
     // A sparse pass first raises the floor, so that the full pass stops early at most points.
     let sparse = points
         .iter()
         .step_by(61)
-        .fold(0.0f32, |m, &p| m.max(grid.distance_above(p, m)));
+        .fold(floor, |m, &p| m.max(grid.distance_above(p, m)));
     points
         .iter()
         .fold(sparse, |m, &p| m.max(grid.distance_above(p, m)))
+}
+
+/// Every point farther than `threshold` from the grid's triangles, with its exact distance, in the
+/// order of `points`, and the largest distance as [`farthest_above`] with `floor` gives it: one
+/// pass for both (each point's search stops at the lower of the two floors).
+pub fn beyond_and_farthest(
+    points: &[Vec3],
+    grid: &TriangleGrid,
+    threshold: f32,
+    floor: f32,
+) -> (Vec<(usize, f32)>, f32) {
+    let sparse = points
+        .iter()
+        .step_by(61)
+        .fold(floor, |m, &p| m.max(grid.distance_above(p, m)));
+    let mut beyond = Vec::new();
+    let mut largest = sparse;
+    for (i, &p) in points.iter().enumerate() {
+        let d = grid.distance_above(p, threshold.min(largest));
+        if d > threshold {
+            beyond.push((i, d));
+        }
+        largest = largest.max(d);
+    }
+    (beyond, largest)
 }
 
 /// The sampled symmetric Hausdorff distance: the larger of the two [`one_sided`] distances.
@@ -394,5 +425,28 @@ mod tests {
             .collect();
         let full = pts.iter().map(|&q| scan(q)).fold(0.0, f32::max);
         assert_eq!(farthest(&pts, &grid), full);
+        // With a floor: the same maximum below it, the floor itself above it.
+        assert_eq!(farthest_above(&pts, &grid, full * 0.5), full);
+        assert_eq!(farthest_above(&pts, &grid, full * 2.0), full * 2.0);
+        // One pass for the points beyond a threshold and the maximum: the points a scan puts
+        // beyond it, in order, with their exact distances, and the same maximum as alone.
+        let scans: Vec<f32> = pts.iter().map(|&q| scan(q)).collect();
+        for (threshold, floor) in [
+            (full * 0.5, 0.0),
+            (full * 0.8, full * 0.3),
+            (full * 0.2, full * 0.9),
+        ] {
+            let (beyond, largest) = beyond_and_farthest(&pts, &grid, threshold, floor);
+            let expected: Vec<(usize, f32)> = scans
+                .iter()
+                .enumerate()
+                .filter(|(_, &d)| d > threshold)
+                .map(|(i, &d)| (i, d))
+                .collect();
+            assert!(!expected.is_empty() && expected.len() < pts.len());
+            assert_eq!(beyond, expected, "threshold {threshold}");
+            assert_eq!(largest, farthest_above(&pts, &grid, floor));
+            assert_eq!(largest, full.max(floor));
+        }
     }
 }

@@ -286,6 +286,20 @@ pub fn read_f32(acc: &gltf::Accessor<'_>, buffers: &[Vec<u8>]) -> ReadResult<Vec
     let mut out = Vec::with_capacity(total);
     match e.source {
         None => out.resize(total, 0.0),
+        // Float vectors and scalars (key times, positions, rotations: nearly every accessor) in
+        // one pass over the bytes; `elements` checked the range.
+        Some((bytes, stride)) if e.data_type == DataType::F32 && e.cols == 1 => {
+            let elem = e.rows * 4;
+            let float = |c: &[u8]| f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+            if stride == elem {
+                out.extend(bytes[..e.count * elem].chunks_exact(4).map(float));
+            } else {
+                for i in 0..e.count {
+                    let el = &bytes[i * stride..i * stride + elem];
+                    out.extend(el.chunks_exact(4).map(float));
+                }
+            }
+        }
         Some((bytes, stride)) => {
             for i in 0..e.count {
                 let el = &bytes[i * stride..];

@@ -165,9 +165,18 @@ pub(super) fn check_curve<T>(
     Ok(())
 }
 
-/// Value of a linear curve at `t` (clamped at the ends); exact at key times.
-pub(super) fn curve_at<T: Copy>(c: &Curve<T>, t: f32, lerp: impl Fn(T, T, f32) -> T) -> T {
-    let k = c.times.partition_point(|&x| x <= t);
+/// Value of a linear curve at `t` (clamped at the ends; exact at key times), for times that never
+/// decrease from one call to the next: `next` is the number of the curve's keys at or before the
+/// previous time, moved forward instead of searched for.
+fn curve_walk<T: Copy>(c: &Curve<T>, next: &mut usize, t: f32, lerp: impl Fn(T, T, f32) -> T) -> T {
+    while *next < c.times.len() && c.times[*next] <= t {
+        *next += 1;
+    }
+    curve_at_key(c, *next, t, lerp)
+}
+
+/// The value at `t` of a curve whose first `k` keys are at or before `t`.
+fn curve_at_key<T: Copy>(c: &Curve<T>, k: usize, t: f32, lerp: impl Fn(T, T, f32) -> T) -> T {
     if k == 0 {
         return c.values[0];
     }
@@ -266,18 +275,20 @@ impl Clip {
         }
         let mut frames = vec![0.0f32; times.len() * stride];
         for (src, dst) in tracks.iter().zip(&out_tracks) {
+            // The clip's times increase, so each curve's key is found by walking forward.
+            let (mut next_t, mut next_r, mut next_s) = (0, 0, 0);
             for (f, &time) in times.iter().enumerate() {
                 let frame = &mut frames[f * stride..(f + 1) * stride];
                 if let Channel::Animated(o) = dst.translation {
-                    let v = curve_at(&src.translation, time, |a, b, x| a.lerp(b, x));
+                    let v = curve_walk(&src.translation, &mut next_t, time, |a, b, x| a.lerp(b, x));
                     frame[o as usize..o as usize + 3].copy_from_slice(&v.to_array());
                 }
                 if let Channel::Animated(o) = dst.rotation {
-                    let v = curve_at(&src.rotation, time, nlerp);
+                    let v = curve_walk(&src.rotation, &mut next_r, time, nlerp);
                     frame[o as usize..o as usize + 4].copy_from_slice(&v.to_array());
                 }
                 if let Channel::Animated(o) = dst.scale {
-                    let v = curve_at(&src.scale, time, |a, b, x| a.lerp(b, x));
+                    let v = curve_walk(&src.scale, &mut next_s, time, |a, b, x| a.lerp(b, x));
                     frame[o as usize..o as usize + 3].copy_from_slice(&v.to_array());
                 }
             }

@@ -202,32 +202,40 @@ impl TriangleGrid {
         let c = self.coord(p);
         let max_r = self.dims.iter().copied().max().unwrap_or(1);
         let mut best = f32::INFINITY;
+        // The triangles of one cell (those whose box is nearer than the best so far); true when
+        // the search may stop (a triangle within `floor`).
+        let visit = |x: i32, y: i32, z: i32, best: &mut f32| -> bool {
+            let cell = self.flat([x, y, z]);
+            let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
+            for &t in &self.entries[s..e] {
+                let (lo, hi) = self.boxes[t as usize];
+                // The triangle's box is a cheap lower bound of its distance.
+                if (lo - p).max(p - hi).max(Vec3::ZERO).length_squared() >= *best * *best {
+                    continue;
+                }
+                let t = &self.tris[t as usize];
+                *best = best.min(point_triangle_distance(p, t[0], t[1], t[2]));
+                if *best <= floor {
+                    return true;
+                }
+            }
+            false
+        };
         for r in 0..=max_r {
             for z in (c[2] - r).max(0)..=(c[2] + r).min(self.dims[2] - 1) {
                 for y in (c[1] - r).max(0)..=(c[1] + r).min(self.dims[1] - 1) {
                     let on_yz = (z - c[2]).abs() == r || (y - c[1]).abs() == r;
-                    // Inside the shell only the two x ends belong to it.
-                    let xs: &mut dyn Iterator<Item = i32> = if on_yz {
-                        &mut ((c[0] - r).max(0)..=(c[0] + r).min(self.dims[0] - 1))
-                    } else {
-                        &mut [c[0] - r, c[0] + r]
-                            .into_iter()
-                            .filter(|&x| x >= 0 && x < self.dims[0])
-                            .take(if r == 0 { 1 } else { 2 })
-                    };
-                    for x in xs {
-                        let cell = self.flat([x, y, z]);
-                        let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
-                        for &t in &self.entries[s..e] {
-                            let (lo, hi) = self.boxes[t as usize];
-                            // The triangle's box is a cheap lower bound of its distance.
-                            if (lo - p).max(p - hi).max(Vec3::ZERO).length_squared() >= best * best
-                            {
-                                continue;
+                    if on_yz {
+                        for x in (c[0] - r).max(0)..=(c[0] + r).min(self.dims[0] - 1) {
+                            if visit(x, y, z, &mut best) {
+                                return best;
                             }
-                            let t = &self.tris[t as usize];
-                            best = best.min(point_triangle_distance(p, t[0], t[1], t[2]));
-                            if best <= floor {
+                        }
+                    } else {
+                        // Inside the shell only the two x ends belong to it (r > 0 here: at
+                        // r = 0 every cell is on the shell).
+                        for x in [c[0] - r, c[0] + r] {
+                            if x >= 0 && x < self.dims[0] && visit(x, y, z, &mut best) {
                                 return best;
                             }
                         }

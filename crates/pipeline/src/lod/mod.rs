@@ -22,6 +22,8 @@
 //!
 //! meshoptimizer passes indices to C++ unchecked, so every buffer is validated before each call.
 
+mod weld;
+
 use crate::lod_parts::position_ids;
 use crate::surface::{
     beyond_and_farthest, farthest_above, sample_points, used_vertices, TriangleGrid,
@@ -32,6 +34,7 @@ use sinew_core::glam;
 use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, Scene};
+use weld::{flat_soup, is_flat_soup, weld};
 
 /// A LOD's reported error is at least its measured distance to LOD 0 times this margin: the larger
 /// of the distance from LOD 0's vertices to the LOD's surface and from the LOD's vertices, centroids
@@ -349,135 +352,6 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
             }
         })
         .collect()
-}
-
-/// True for a flat-shaded triangle soup: every vertex is used by exactly one triangle and the three
-/// corners of every triangle share one normal (a non-indexed source such as Fox.glb, whose importer
-/// generated per-face normals). meshoptimizer sees every corner of such a mesh as an attribute seam
-/// and cannot collapse anything, so the soup is welded without normals and rebuilt flat afterwards.
-fn is_flat_soup(lod: &Lod) -> bool {
-    if lod.indices.is_empty() || lod.indices.len() != lod.positions.len() {
-        return false;
-    }
-    let mut uses = vec![0u8; lod.positions.len()];
-    for &i in &lod.indices {
-        let u = &mut uses[i as usize];
-        if *u > 0 {
-            return false;
-        }
-        *u = 1;
-    }
-    lod.indices.chunks_exact(3).all(|t| {
-        let n = lod.normals[t[0] as usize];
-        lod.normals[t[1] as usize] == n && lod.normals[t[2] as usize] == n
-    })
-}
-
-/// Merges vertices that are bit-for-bit equal in position, UV, joints and weights (and normal, unless
-/// `ignore_normals`), with meshoptimizer's `generateVertexRemap`. Lossless when normals count; with
-/// `ignore_normals` the merged vertices get area-weighted normals of the welded surface (used only as
-/// a simplification attribute; [`flat_soup`] rebuilds face normals afterwards). `lod` must be valid.
-fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
-    const KEY: usize = 16;
-    let n = lod.positions.len();
-    let mut keys = vec![[0u32; KEY]; n];
-    for (v, k) in keys.iter_mut().enumerate() {
-        let p = lod.positions[v];
-        k[0..3].copy_from_slice(&[p.x.to_bits(), p.y.to_bits(), p.z.to_bits()]);
-        if !ignore_normals {
-            let q = lod.normals[v];
-            k[3..6].copy_from_slice(&[q.x.to_bits(), q.y.to_bits(), q.z.to_bits()]);
-        }
-        if let Some(uv) = lod.uvs.get(v) {
-            k[6..8].copy_from_slice(&[uv.x.to_bits(), uv.y.to_bits()]);
-        }
-        if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {
-            k[8] = j[0] as u32 | (j[1] as u32) << 16;
-            k[9] = j[2] as u32 | (j[3] as u32) << 16;
-            for (slot, x) in w.iter().enumerate() {
-                k[10 + slot] = x.to_bits();
-            }
-        }
-    }
-    // Indices were validated against `n` (validate_lod), as generateVertexRemap requires.
-    let (unique, remap) = meshopt::generate_vertex_remap(&keys, Some(&lod.indices));
-    let mut first = vec![u32::MAX; unique];
-    for (v, &r) in remap.iter().enumerate() {
-        if let Some(f) = first.get_mut(r as usize) {
-            if *f == u32::MAX {
-                *f = v as u32;
-            }
-        }
-    }
-    let pick = |f: &u32| *f as usize;
-    let indices: Vec<u32> = lod.indices.iter().map(|&i| remap[i as usize]).collect();
-    let positions: Vec<glam::Vec3> = first.iter().map(|f| lod.positions[pick(f)]).collect();
-    let normals = if ignore_normals {
-        let mut acc = vec![glam::Vec3::ZERO; unique];
-        for t in indices.chunks_exact(3) {
-            let (a, b, c) = (t[0] as usize, t[1] as usize, t[2] as usize);
-            let f = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
-            acc[a] += f;
-            acc[b] += f;
-            acc[c] += f;
-        }
-        acc.iter()
-            .zip(&first)
-            .map(|(v, f)| v.try_normalize().unwrap_or(lod.normals[pick(f)]))
-            .collect()
-    } else {
-        first.iter().map(|f| lod.normals[pick(f)]).collect()
-    };
-    Lod {
-        positions,
-        normals,
-        uvs: if lod.uvs.is_empty() {
-            Vec::new()
-        } else {
-            first.iter().map(|f| lod.uvs[pick(f)]).collect()
-        },
-        joints: if lod.joints.is_empty() {
-            Vec::new()
-        } else {
-            first.iter().map(|f| lod.joints[pick(f)]).collect()
-        },
-        weights: if lod.weights.is_empty() {
-            Vec::new()
-        } else {
-            first.iter().map(|f| lod.weights[pick(f)]).collect()
-        },
-        indices,
-        submeshes: lod.submeshes.clone(),
-        error: lod.error,
-    }
-}
-
-/// Rebuilds a flat-shaded soup from a simplified welded mesh: three own vertices per triangle, each
-/// with the triangle's face normal (the corner's smooth normal if the triangle has no area).
-fn flat_soup(lod: &Lod) -> Lod {
-    let mut out = Lod {
-        submeshes: lod.submeshes.clone(),
-        error: lod.error,
-        ..Lod::default()
-    };
-    for t in lod.indices.chunks_exact(3) {
-        let c = [t[0] as usize, t[1] as usize, t[2] as usize];
-        let p = c.map(|v| lod.positions[v]);
-        let face = (p[1] - p[0]).cross(p[2] - p[0]).try_normalize();
-        for &v in &c {
-            out.indices.push(out.positions.len() as u32);
-            out.positions.push(lod.positions[v]);
-            out.normals.push(face.unwrap_or(lod.normals[v]));
-            if let Some(uv) = lod.uvs.get(v) {
-                out.uvs.push(*uv);
-            }
-            if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {
-                out.joints.push(*j);
-                out.weights.push(*w);
-            }
-        }
-    }
-    out
 }
 
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
@@ -1001,109 +875,4 @@ pub fn generate_mesh_lods(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use sinew_core::glam::{Vec2, Vec3};
-
-    #[test]
-    fn irrelevant_below_is_the_largest_distance_that_cannot_raise_the_error() {
-        let mut s = 0x9e37_79b9u32;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32
-        };
-        let mut tight = 0;
-        for _ in 0..10_000 {
-            let accumulated = rnd() * 0.05;
-            let scale = 0.01 + rnd() * 500.0;
-            let floor = irrelevant_below(accumulated, scale);
-            assert!(floor > 0.0, "{accumulated} {scale}");
-            assert!(floor / scale * MEASURE_MARGIN <= accumulated);
-            // The next float up would raise the error: the floor is as high as it can be.
-            let next = f32::from_bits(floor.to_bits() + 1);
-            assert!(next / scale * MEASURE_MARGIN > accumulated);
-            tight += 1;
-        }
-        assert_eq!(tight, 10_000);
-        assert_eq!(irrelevant_below(0.0, 2.0), 0.0);
-        assert_eq!(irrelevant_below(0.01, 0.0), 0.0);
-        assert_eq!(irrelevant_below(f32::NAN, 2.0), 0.0);
-        assert_eq!(irrelevant_below(f32::INFINITY, 2.0), 0.0);
-    }
-
-    /// Two quads side by side in two submeshes, sharing the middle edge's positions; the left
-    /// quad's right corners come twice: at the top with another normal only (a hard edge), at
-    /// the bottom with another UV (a seam).
-    #[test]
-    fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
-        let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
-        let positions = vec![
-            p(0.0, 0.0), // 0
-            p(1.0, 0.0), // 1: border (both submeshes), bottom
-            p(1.0, 1.0), // 2: border, top
-            p(0.0, 1.0), // 3
-            p(2.0, 0.0), // 4
-            p(2.0, 1.0), // 5
-            p(1.0, 1.0), // 6: same position as 2, other normal only
-            p(1.0, 0.0), // 7: same position as 1, other UV
-            p(0.5, 0.5), // 8: alone at its position, different normal from nothing
-            p(0.5, 0.5), // 9: same as 8 with another normal (hard edge, one submesh)
-            p(0.0, 2.0), // 10: same UV as 11, different normal
-            p(0.0, 2.0), // 11
-            p(3.0, 0.0), // 12: seam inside the right submesh
-            p(3.0, 0.0), // 13
-        ];
-        let n = positions.len();
-        let mut normals = vec![Vec3::Z; n];
-        normals[6] = Vec3::X;
-        normals[9] = Vec3::X;
-        normals[11] = Vec3::Y;
-        let mut uvs = vec![Vec2::ZERO; n];
-        uvs[7] = Vec2::ONE;
-        uvs[13] = Vec2::ONE;
-        let indices = vec![
-            0, 1, 2, 0, 2, 3, 8, 9, 10, 10, 11, 3, 6, 7, 1, 4, 5, 7, 12, 13, 4,
-        ];
-        let lod = Lod {
-            positions,
-            normals,
-            uvs,
-            indices,
-            submeshes: vec![
-                Submesh {
-                    first_index: 0,
-                    index_count: 12,
-                    material: "left".into(),
-                },
-                Submesh {
-                    first_index: 12,
-                    index_count: 9,
-                    material: "right".into(),
-                },
-            ],
-            ..Lod::default()
-        };
-        const LOCK: SimplifyVertex = SimplifyVertex::Lock;
-        const OPEN: SimplifyVertex = SimplifyVertex::None;
-        const PROTECT: SimplifyVertex = SimplifyVertex::Protect;
-        let expected = vec![
-            PROTECT, // 0
-            LOCK,    // 1: used by both submeshes
-            LOCK,    // 2
-            PROTECT, // 3
-            PROTECT, // 4
-            PROTECT, // 5
-            LOCK,    // 6: its position is on the border
-            LOCK,    // 7
-            OPEN,    // 8: a hard normal edge
-            OPEN,    // 9
-            OPEN,    // 10
-            OPEN,    // 11
-            PROTECT, // 12: a UV seam
-            PROTECT, // 13
-        ];
-        assert_eq!(vertex_flags(&lod), expected);
-    }
-}
+mod tests;

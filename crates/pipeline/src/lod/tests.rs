@@ -1,0 +1,105 @@
+//! Unit tests of the LOD builder's private helpers.
+use super::*;
+use sinew_core::glam::{Vec2, Vec3};
+
+#[test]
+fn irrelevant_below_is_the_largest_distance_that_cannot_raise_the_error() {
+    let mut s = 0x9e37_79b9u32;
+    let mut rnd = || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        s as f32 / u32::MAX as f32
+    };
+    let mut tight = 0;
+    for _ in 0..10_000 {
+        let accumulated = rnd() * 0.05;
+        let scale = 0.01 + rnd() * 500.0;
+        let floor = irrelevant_below(accumulated, scale);
+        assert!(floor > 0.0, "{accumulated} {scale}");
+        assert!(floor / scale * MEASURE_MARGIN <= accumulated);
+        // The next float up would raise the error: the floor is as high as it can be.
+        let next = f32::from_bits(floor.to_bits() + 1);
+        assert!(next / scale * MEASURE_MARGIN > accumulated);
+        tight += 1;
+    }
+    assert_eq!(tight, 10_000);
+    assert_eq!(irrelevant_below(0.0, 2.0), 0.0);
+    assert_eq!(irrelevant_below(0.01, 0.0), 0.0);
+    assert_eq!(irrelevant_below(f32::NAN, 2.0), 0.0);
+    assert_eq!(irrelevant_below(f32::INFINITY, 2.0), 0.0);
+}
+
+/// Two quads side by side in two submeshes, sharing the middle edge's positions; the left
+/// quad's right corners come twice: at the top with another normal only (a hard edge), at
+/// the bottom with another UV (a seam).
+#[test]
+fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
+    let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    let positions = vec![
+        p(0.0, 0.0), // 0
+        p(1.0, 0.0), // 1: border (both submeshes), bottom
+        p(1.0, 1.0), // 2: border, top
+        p(0.0, 1.0), // 3
+        p(2.0, 0.0), // 4
+        p(2.0, 1.0), // 5
+        p(1.0, 1.0), // 6: same position as 2, other normal only
+        p(1.0, 0.0), // 7: same position as 1, other UV
+        p(0.5, 0.5), // 8: alone at its position, different normal from nothing
+        p(0.5, 0.5), // 9: same as 8 with another normal (hard edge, one submesh)
+        p(0.0, 2.0), // 10: same UV as 11, different normal
+        p(0.0, 2.0), // 11
+        p(3.0, 0.0), // 12: seam inside the right submesh
+        p(3.0, 0.0), // 13
+    ];
+    let n = positions.len();
+    let mut normals = vec![Vec3::Z; n];
+    normals[6] = Vec3::X;
+    normals[9] = Vec3::X;
+    normals[11] = Vec3::Y;
+    let mut uvs = vec![Vec2::ZERO; n];
+    uvs[7] = Vec2::ONE;
+    uvs[13] = Vec2::ONE;
+    let indices = vec![
+        0, 1, 2, 0, 2, 3, 8, 9, 10, 10, 11, 3, 6, 7, 1, 4, 5, 7, 12, 13, 4,
+    ];
+    let lod = Lod {
+        positions,
+        normals,
+        uvs,
+        indices,
+        submeshes: vec![
+            Submesh {
+                first_index: 0,
+                index_count: 12,
+                material: "left".into(),
+            },
+            Submesh {
+                first_index: 12,
+                index_count: 9,
+                material: "right".into(),
+            },
+        ],
+        ..Lod::default()
+    };
+    const LOCK: SimplifyVertex = SimplifyVertex::Lock;
+    const OPEN: SimplifyVertex = SimplifyVertex::None;
+    const PROTECT: SimplifyVertex = SimplifyVertex::Protect;
+    let expected = vec![
+        PROTECT, // 0
+        LOCK,    // 1: used by both submeshes
+        LOCK,    // 2
+        PROTECT, // 3
+        PROTECT, // 4
+        PROTECT, // 5
+        LOCK,    // 6: its position is on the border
+        LOCK,    // 7
+        OPEN,    // 8: a hard normal edge
+        OPEN,    // 9
+        OPEN,    // 10
+        OPEN,    // 11
+        PROTECT, // 12: a UV seam
+        PROTECT, // 13
+    ];
+    assert_eq!(vertex_flags(&lod), expected);
+}

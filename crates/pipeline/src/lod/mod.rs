@@ -354,6 +354,19 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
         .collect()
 }
 
+/// The LOD's material ranges, or one range over all its indices when it has none.
+fn submeshes_or_whole(lod: &Lod) -> std::borrow::Cow<'_, [Submesh]> {
+    if lod.submeshes.is_empty() {
+        std::borrow::Cow::Owned(vec![Submesh {
+            first_index: 0,
+            index_count: lod.indices.len() as u32,
+            material: String::new(),
+        }])
+    } else {
+        std::borrow::Cow::Borrowed(&lod.submeshes)
+    }
+}
+
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
 /// Returns the new LOD (compacted and optimised) and the relative error of this step.
 /// `keep`: positions (bit patterns, sorted) whose vertices are locked (the part extremes of LOD 0).
@@ -396,17 +409,7 @@ fn simplify_step(
     let mut indices = Vec::with_capacity(source.indices.len());
     let mut submeshes = Vec::with_capacity(source.submeshes.len());
     let mut worst = 0.0f32;
-    let whole = [Submesh {
-        first_index: 0,
-        index_count: source.indices.len() as u32,
-        material: String::new(),
-    }];
-    let subs: &[Submesh] = if source.submeshes.is_empty() {
-        &whole
-    } else {
-        &source.submeshes
-    };
-    for sub in subs {
+    for sub in submeshes_or_whole(source).iter() {
         let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
         let part = &source.indices[range];
         let part_tris = part.len() / 3;
@@ -536,17 +539,7 @@ pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
     let g = &mesh.geometry;
     let mut indices = Vec::with_capacity(g.indices.len());
     let mut submeshes = Vec::new();
-    let whole = [Submesh {
-        first_index: 0,
-        index_count: g.indices.len() as u32,
-        material: String::new(),
-    }];
-    let subs: &[Submesh] = if g.submeshes.is_empty() {
-        &whole
-    } else {
-        &g.submeshes
-    };
-    for sub in subs {
+    for sub in submeshes_or_whole(g).iter() {
         let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
         let mut part = g.indices[range].to_vec();
         if !part.is_empty() {

@@ -773,11 +773,18 @@ pub fn build_lods_tuned(
         // so `lod_grid` is the grid of `lod` as it is now.
         let floor = irrelevant_below(accumulated, scale);
         let lost = lost.unwrap_or_else(|| farthest_above(&base_vertices, &lod_grid, floor));
-        let added = farthest_above(
-            &sample_points(&lod.positions, &lod.indices),
-            &base_grid,
-            floor,
-        );
+        // Each point once: an edge's midpoint comes from both its triangles (the same bits, as
+        // float addition commutes), and a maximum does not depend on repeats or order.
+        let samples = sample_points(&lod.positions, &lod.indices);
+        let (count, ids) = position_ids(&samples);
+        let mut distinct = Vec::with_capacity(count);
+        let mut taken = vec![false; count];
+        for (p, &id) in samples.iter().zip(&ids) {
+            if !std::mem::replace(&mut taken[id as usize], true) {
+                distinct.push(*p);
+            }
+        }
+        let added = farthest_above(&distinct, &base_grid, floor);
         let measured = if scale > 0.0 && lost.is_finite() {
             lost.max(added) / scale * MEASURE_MARGIN
         } else {

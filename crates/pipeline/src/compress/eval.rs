@@ -120,8 +120,10 @@ pub(super) struct Eval<'a> {
 
 impl<'a> Eval<'a> {
     /// The state of `work` quantized with `bits`. With `check`, also whether every joint is within
-    /// its limit at every source time; the poses are then computed only up to the first time that
-    /// is not (the state is for the check alone).
+    /// its limit at every source time: `Err(i)` names a source time `i` where one is not, and the
+    /// poses are then computed only up to there (the state is for the check alone). `probe`: a
+    /// source time to check first (where a previous check failed): its keys are quantized out of
+    /// order, which changes nothing, as a key's quantization reads no other key.
     pub(super) fn build(
         ctx: &'a Ctx<'a>,
         layout: &'a Layout,
@@ -129,7 +131,8 @@ impl<'a> Eval<'a> {
         bits: Vec<u8>,
         compensate: bool,
         check: bool,
-    ) -> (Eval<'a>, bool) {
+        probe: Option<usize>,
+    ) -> (Eval<'a>, Result<(), usize>) {
         let rig = ctx.rig;
         let nj = rig.skeleton.len();
         let parents = rig.skeleton.parents();
@@ -248,9 +251,24 @@ impl<'a> Eval<'a> {
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
         };
+        let seg_len = layout.seg_len.max(1);
+        let fails =
+            |e: &Eval, i: usize| (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j]));
+        if let Some(i) = probe.filter(|&i| check && i < e.at.len()) {
+            let (k0, k1, a) = e.at[i];
+            for k in [k0, k1]
+                .into_iter()
+                .filter(|&k| k < n && (k == k0 || a != 0.0))
+            {
+                e.requantize_key(k / seg_len, k);
+            }
+            e.resample(i);
+            if fails(&e, i) {
+                return (e, Err(i));
+            }
+        }
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
-        let seg_len = layout.seg_len.max(1);
         let mut next = 0;
         for i in 0..e.at.len() {
             let (k0, k1, a) = e.at[i];
@@ -260,15 +278,15 @@ impl<'a> Eval<'a> {
                 next += 1;
             }
             e.resample(i);
-            if check && (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j])) {
-                return (e, false);
+            if check && fails(&e, i) {
+                return (e, Err(i));
             }
         }
         while next < n {
             e.requantize_key(next / seg_len, next);
             next += 1;
         }
-        (e, true)
+        (e, Ok(()))
     }
 
     /// [`Eval::build`] without the check.
@@ -279,7 +297,7 @@ impl<'a> Eval<'a> {
         bits: Vec<u8>,
         compensate: bool,
     ) -> Eval<'a> {
-        Eval::build(ctx, layout, work, bits, compensate, false).0
+        Eval::build(ctx, layout, work, bits, compensate, false, None).0
     }
 
     pub(super) fn parent(&self, j: usize) -> Option<usize> {

@@ -48,7 +48,8 @@
 //!   time over the round's threshold (a failed try costs a fraction of a full one; the decision is
 //!   the one a whole pass would make); the time where a component's try last failed in a segment
 //!   is measured first next time. First-width checks likewise quantize keys as the times reach
-//!   them.
+//!   them, and check first the time where the last failing check stopped (in this ladder or the
+//!   previous layout's).
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and the refinements of the best
 //!   candidates. A long clip's single refinement spreads its own tries: a try writes only into its

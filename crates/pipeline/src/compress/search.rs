@@ -30,6 +30,12 @@ fn map_in_order<T: Send, R: Send>(
 /// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
 /// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
 /// returns the budget, the widths and the stored integers they give (per component, per key).
+///
+/// `probe`: the source time where the last failing check stopped (of this ladder or an earlier
+/// layout's), checked first by the next check; updated here. A check's verdict does not depend on
+/// the order of its times, so the answer is the same with any probe: it only makes failing checks
+/// stop sooner (the hardest pose of a clip is usually the same from one rung and layout to the
+/// next).
 pub(super) fn first_state(
     ctx: &Ctx,
     layout: &Layout,
@@ -37,11 +43,20 @@ pub(super) fn first_state(
     start: f32,
     compensate: bool,
     par: bool,
+    probe: &mut Option<usize>,
 ) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
-    let passes = |budget: f32| {
+    type Passed = Result<(Vec<u8>, Vec<Vec<u32>>), usize>;
+    let passes = |budget: f32, probe: Option<usize>| -> Passed {
         let bits = layout.first_bits(budget);
-        let (e, ok) = Eval::build(ctx, layout, work, bits, compensate, true);
-        ok.then_some((e.bits, e.qi))
+        let (e, verdict) = Eval::build(ctx, layout, work, bits, compensate, true, probe);
+        verdict.map(|()| (e.bits, e.qi))
+    };
+    // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
+    let noted = |r: Passed, probe: &mut Option<usize>| {
+        if let Err(i) = r {
+            *probe = Some(i);
+        }
+        r.ok()
     };
     // Up the ladder, the next two rungs are measured together (in parallel): the usual outcome,
     // the start passing and the rung above failing, then takes one round, and a rung measured in
@@ -49,14 +64,16 @@ pub(super) fn first_state(
     // those of one rung at a time.
     let step = std::f32::consts::SQRT_2;
     let mut budget = start;
-    let both = |a: f32, b: f32| {
+    let both = |a: f32, b: f32, p: Option<usize>| {
         if par {
-            rayon::join(|| passes(a), || passes(b))
+            rayon::join(|| passes(a, p), || passes(b, p))
         } else {
-            (passes(a), passes(b))
+            (passes(a, p), passes(b, p))
         }
     };
-    let (mut found, up) = both(budget, budget * step);
+    let (r0, r1) = both(budget, budget * step, *probe);
+    let mut found = noted(r0, probe);
+    let up = noted(r1, probe);
     if found.is_some() {
         let mut next = Some(up);
         for _ in 0..8 {
@@ -65,7 +82,9 @@ pub(super) fn first_state(
             budget *= step;
             found = Some(f);
             let (b1, b2) = (budget * step, budget * step * step);
-            let (r1, r2) = both(b1, b2);
+            let (r1, r2) = both(b1, b2, *probe);
+            let r1 = noted(r1, probe);
+            let r2 = noted(r2, probe);
             let Some(f1) = r1 else { break };
             budget = b1;
             found = Some(f1);
@@ -76,7 +95,7 @@ pub(super) fn first_state(
         // whole measurement wasted.
         for _ in 0..40 {
             budget /= step;
-            found = passes(budget);
+            found = noted(passes(budget, *probe), probe);
             if found.is_some() {
                 break;
             }
@@ -274,9 +293,12 @@ pub(super) fn compress_work(
     // (size with the first bit widths, layout, bit widths)
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;
+    let mut probe = None;
     for (li, (wi, layout, _)) in layouts.iter().enumerate() {
         let w = &works[*wi];
-        let Some((budget, bits, qi)) = first_state(&ctx, layout, w, start, compensate, par) else {
+        let Some((budget, bits, qi)) =
+            first_state(&ctx, layout, w, start, compensate, par, &mut probe)
+        else {
             continue;
         };
         start = budget;

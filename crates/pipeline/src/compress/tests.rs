@@ -140,7 +140,8 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate, true).unwrap();
+        let (_, bits, _) =
+            first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e, true);
         assert!(
@@ -363,7 +364,8 @@ fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
         assert_eq!(layout.seg_count, 13);
-        let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, compensate, true).unwrap();
+        let (_, bits, _) =
+            first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None).unwrap();
         let mut want = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend_one_at_a_time(&mut want);
         assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
@@ -400,7 +402,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     let segs = layout.seg_count;
     let nc = layout.comps.len();
     assert_eq!(segs, 8);
-    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true).unwrap();
+    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true, &mut None).unwrap();
     let measure = |e: &Eval, s: usize, c: usize| -> u32 {
         let mut t = super::trial::Trial::default();
         t.run(
@@ -461,4 +463,55 @@ fn a_long_clip_refined_alone_compresses_to_the_same_bytes_at_any_thread_count() 
         assert_eq!(r.0, runs[0].0);
         assert_eq!(r.1, runs[0].1);
     }
+}
+
+#[test]
+fn a_probe_changes_no_first_width_verdict() {
+    // The same checks with no probe, with the failing time of a previous check as the probe, and
+    // with every other time as the probe: the same verdicts, and for passing widths the same
+    // stored integers; and the ladder reaches the same budget and widths.
+    let skeleton = chain(5, 0.4);
+    let clip = swing(&skeleton, 40);
+    let source = clip.to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let times = source.times().len();
+    let (mut passed, mut failed) = (0, 0);
+    for compensate in [true, false] {
+        let layout = Layout::new(&work, &rig, 16, compensate);
+        for rung in 0..12 {
+            let budget = 0.0002 * std::f32::consts::SQRT_2.powi(rung);
+            let build = |probe| {
+                let (e, verdict) = Eval::build(
+                    &ctx,
+                    &layout,
+                    &work,
+                    layout.first_bits(budget),
+                    compensate,
+                    true,
+                    probe,
+                );
+                verdict.map(|()| e.qi)
+            };
+            let plain = build(None);
+            match &plain {
+                Ok(_) => passed += 1,
+                Err(_) => failed += 1,
+            }
+            for probe in (0..times).map(Some).chain([Some(times + 3)]) {
+                let with = build(probe);
+                assert_eq!(with.is_ok(), plain.is_ok(), "rung {rung} probe {probe:?}");
+                if let (Ok(a), Ok(b)) = (&with, &plain) {
+                    assert_eq!(a, b);
+                }
+            }
+        }
+        let alone = first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None);
+        let mut probe = Some(times / 2);
+        let probed = first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut probe);
+        assert_eq!(alone, probed);
+    }
+    // Both verdicts occur, so the comparison can tell.
+    assert!(passed > 0 && failed > 0, "{passed} passed, {failed} failed");
 }

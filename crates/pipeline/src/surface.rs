@@ -318,14 +318,20 @@ pub fn farthest(points: &[Vec3], grid: &TriangleGrid) -> f32 {
 /// [`farthest`] when it is above `floor`; otherwise `floor` (a caller to whom distances up to
 /// `floor` make no difference lets most points stop at their first triangle within it).
 pub fn farthest_above(points: &[Vec3], grid: &TriangleGrid, floor: f32) -> f32 {
-    // A sparse pass first raises the floor, so that the full pass stops early at most points.
-    let sparse = points
-        .iter()
-        .step_by(61)
-        .fold(floor, |m, &p| m.max(grid.distance_above(p, m)));
     points
         .iter()
-        .fold(sparse, |m, &p| m.max(grid.distance_above(p, m)))
+        .fold(sparse_floor(points, grid, floor), |m, &p| {
+            m.max(grid.distance_above(p, m))
+        })
+}
+
+/// The largest distance of every 61st point, at least `floor`: a pass that raises the floor first,
+/// so that the full pass stops early at most points.
+fn sparse_floor(points: &[Vec3], grid: &TriangleGrid, floor: f32) -> f32 {
+    points
+        .iter()
+        .step_by(61)
+        .fold(floor, |m, &p| m.max(grid.distance_above(p, m)))
 }
 
 /// Every point farther than `threshold` from the grid's triangles, with its exact distance, in the
@@ -337,12 +343,8 @@ pub fn beyond_and_farthest(
     threshold: f32,
     floor: f32,
 ) -> (Vec<(usize, f32)>, f32) {
-    let sparse = points
-        .iter()
-        .step_by(61)
-        .fold(floor, |m, &p| m.max(grid.distance_above(p, m)));
     let mut beyond = Vec::new();
-    let mut largest = sparse;
+    let mut largest = sparse_floor(points, grid, floor);
     for (i, &p) in points.iter().enumerate() {
         let d = grid.distance_above(p, threshold.min(largest));
         if d > threshold {

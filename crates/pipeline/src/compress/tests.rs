@@ -132,10 +132,7 @@ fn mirrored_and_stretched_joints_stay_within_the_tolerance() {
 fn incremental_state_matches_a_fresh_evaluation() {
     // After the descent (thousands of tentative changes and undos), the kept state must be what
     // quantizing from scratch with the final bit widths gives, bit for bit.
-    let skeleton = chain(5, 0.4);
-    let clip = swing(&skeleton, 40);
-    let source = clip.to_plain();
-    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let (source, rig) = swinging_chain();
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
@@ -346,6 +343,14 @@ fn descend_one_at_a_time(eval: &mut Eval) {
     }
 }
 
+/// A five-joint chain swinging over 40 keys: its source clip and rig.
+fn swinging_chain() -> (Clip, Rig) {
+    let skeleton = chain(5, 0.4);
+    let source = swing(&skeleton, 40).to_plain();
+    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    (source, rig)
+}
+
 /// A moving, swinging chain of `joints` joints with `keys` keys: its source clip and rig.
 fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
     let skeleton = chain(joints, 0.35);
@@ -470,10 +475,7 @@ fn a_probe_changes_no_first_width_verdict() {
     // The same checks with no probe, with the failing time of a previous check as the probe, and
     // with every other time as the probe: the same verdicts, and for passing widths the same
     // stored integers; and the ladder reaches the same budget and widths.
-    let skeleton = chain(5, 0.4);
-    let clip = swing(&skeleton, 40);
-    let source = clip.to_plain();
-    let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
+    let (source, rig) = swinging_chain();
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     let times = source.times().len();

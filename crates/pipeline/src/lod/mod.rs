@@ -354,17 +354,39 @@ fn vertex_flags(lod: &Lod) -> Vec<SimplifyVertex> {
         .collect()
 }
 
-/// The LOD's material ranges, or one range over all its indices when it has none.
-fn submeshes_or_whole(lod: &Lod) -> std::borrow::Cow<'_, [Submesh]> {
-    if lod.submeshes.is_empty() {
-        std::borrow::Cow::Owned(vec![Submesh {
-            first_index: 0,
-            index_count: lod.indices.len() as u32,
-            material: String::new(),
-        }])
+/// Runs `each` on the indices of every material range of `lod` (all its indices when it has
+/// none), optimises each result for the vertex cache and joins them: the new indices and material
+/// ranges (none when `lod` has none).
+fn per_submesh(lod: &Lod, mut each: impl FnMut(&[u32]) -> Vec<u32>) -> (Vec<u32>, Vec<Submesh>) {
+    let whole = [Submesh {
+        first_index: 0,
+        index_count: lod.indices.len() as u32,
+        material: String::new(),
+    }];
+    let subs: &[Submesh] = if lod.submeshes.is_empty() {
+        &whole
     } else {
-        std::borrow::Cow::Borrowed(&lod.submeshes)
+        &lod.submeshes
+    };
+    let mut indices = Vec::with_capacity(lod.indices.len());
+    let mut submeshes = Vec::with_capacity(subs.len());
+    for sub in subs {
+        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+        let mut part = each(&lod.indices[range]);
+        if !part.is_empty() {
+            meshopt::optimize_vertex_cache_in_place(&mut part, lod.positions.len());
+        }
+        submeshes.push(Submesh {
+            first_index: indices.len() as u32,
+            index_count: part.len() as u32,
+            material: sub.material.clone(),
+        });
+        indices.extend(part);
     }
+    if lod.submeshes.is_empty() {
+        submeshes.clear();
+    }
+    (indices, submeshes)
 }
 
 /// One simplification step: `source` to about `target_triangles`, within `max_error` (relative).
@@ -406,12 +428,8 @@ fn simplify_step(
         }
     }
     let total = source.triangle_count().max(1);
-    let mut indices = Vec::with_capacity(source.indices.len());
-    let mut submeshes = Vec::with_capacity(source.submeshes.len());
     let mut worst = 0.0f32;
-    for sub in submeshes_or_whole(source).iter() {
-        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
-        let part = &source.indices[range];
+    let (indices, submeshes) = per_submesh(source, |part| {
         let part_tris = part.len() / 3;
         // Each submesh gets its share of the target, rounded; never below one triangle if it had any.
         let target = ((part_tris as f64 * target_triangles as f64 / total as f64).round() as usize)
@@ -434,20 +452,8 @@ fn simplify_step(
             )
         };
         worst = worst.max(err);
-        let mut simplified = simplified;
-        if !simplified.is_empty() {
-            meshopt::optimize_vertex_cache_in_place(&mut simplified, source.positions.len());
-        }
-        submeshes.push(Submesh {
-            first_index: indices.len() as u32,
-            index_count: simplified.len() as u32,
-            material: sub.material.clone(),
-        });
-        indices.extend_from_slice(&simplified);
-    }
-    if source.submeshes.is_empty() {
-        submeshes.clear();
-    }
+        simplified
+    });
     let lod = compact(source, indices, submeshes);
     (lod, worst)
 }
@@ -537,24 +543,7 @@ pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
         problem,
     })?;
     let g = &mesh.geometry;
-    let mut indices = Vec::with_capacity(g.indices.len());
-    let mut submeshes = Vec::new();
-    for sub in submeshes_or_whole(g).iter() {
-        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
-        let mut part = g.indices[range].to_vec();
-        if !part.is_empty() {
-            meshopt::optimize_vertex_cache_in_place(&mut part, g.positions.len());
-        }
-        submeshes.push(Submesh {
-            first_index: indices.len() as u32,
-            index_count: part.len() as u32,
-            material: sub.material.clone(),
-        });
-        indices.extend(part);
-    }
-    if g.submeshes.is_empty() {
-        submeshes.clear();
-    }
+    let (mut indices, submeshes) = per_submesh(g, <[u32]>::to_vec);
     // Unused vertices stay, after the used ones, so the map back to the source stays complete.
     let remap = first_use_remap(&indices, g.positions.len());
     let mut next = remap.iter().filter(|&&r| r != u32::MAX).count() as u32;

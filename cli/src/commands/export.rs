@@ -76,8 +76,8 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
 pub fn human(r: &ExportCmdReport) -> String {
     let e = &r.export;
     let mut s = format!(
-        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes), {} materials, {} images, {} animations ({} frames)\n",
-        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.materials, e.images, e.animations, e.frames
+        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes), {} materials, {} images, {} animations ({} keys)\n",
+        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.materials, e.images, e.animations, e.keys
     );
     for n in &e.notes {
         s.push_str(&format!("  note: {n}\n"));

@@ -3,7 +3,7 @@
 //! others behind `MSFT_lod`), every clip as an animation sampled through the runtime, and what glTF has
 //! no place for in `extras`. Decisions: docs/export.md.
 
-use super::animation::{rotations, sample_clip, scales, translations, unit};
+use super::animation::{key_clip, tolerances, unit, KeyedClip};
 use super::buffer::{Bin, Use};
 use gltf_json as json;
 use json::accessor::Type;
@@ -11,7 +11,7 @@ use json::validation::Checked::Valid;
 use json::Index;
 use serde_json::{json as js, Map, Value};
 use sinew_core::format::Asset;
-use sinew_core::glam::Mat4;
+use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Lod, Skeleton};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -47,8 +47,8 @@ pub struct ExportReport {
     pub images: usize,
     /// Animations (one per exported clip).
     pub animations: usize,
-    /// Frames over all animations.
-    pub frames: usize,
+    /// Keys over all channels of all animations.
+    pub keys: usize,
     /// One sentence per thing left out (a clip that drives no joint, a texture not found...).
     pub notes: Vec<String>,
 }
@@ -166,6 +166,7 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
         b.root.extensions_used.push("MSFT_lod".to_string());
     }
     let mut clips = Vec::new();
+    let tol = tolerances(asset);
     for clip in &asset.clips {
         let mut entry = js!({
             "name": clip.name(),
@@ -183,12 +184,12 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
                 ));
                 entry["animation"] = Value::Null;
             }
-            Some(s) => match sample_clip(s, clip) {
-                Ok(sampled) => {
+            Some(s) => match key_clip(s, clip, &tol) {
+                Ok(keyed) => {
                     entry["animation"] = js!(b.root.animations.len());
-                    entry["fps"] = js!(sampled.fps);
-                    entry["unbound_tracks"] = js!(sampled.unbound);
-                    b.animation(clip.name(), &sampled);
+                    entry["keys"] = js!(keyed.key_count());
+                    entry["unbound_tracks"] = js!(keyed.unbound);
+                    b.animation(clip.name(), &keyed);
                 }
                 Err(e) => {
                     b.report.notes.push(format!("{e}; not exported"));
@@ -448,7 +449,7 @@ impl Builder {
                 .iter()
                 .flat_map(|v| {
                     let u = v.normalize_or_zero();
-                    if u == sinew_core::glam::Vec3::ZERO {
+                    if u == Vec3::ZERO {
                         [0.0, 1.0, 0.0]
                     } else {
                         u.to_array()
@@ -502,29 +503,58 @@ impl Builder {
         }))
     }
 
-    /// One animation: a shared time accessor and a translation, rotation and scale channel per
-    /// driven joint (joint node index = joint index).
-    fn animation(&mut self, name: &str, s: &super::animation::SampledClip) {
-        let input = self
-            .bin
-            .floats(&mut self.root, &s.times, Type::Scalar, Use::Other, true);
+    /// One animation: per driven joint a translation, rotation and scale channel, each with its own
+    /// keys (joint node index = joint index); channels with the same key times share one time
+    /// accessor.
+    fn animation(&mut self, name: &str, k: &KeyedClip) {
+        let mut inputs: BTreeMap<Vec<u32>, Index<json::Accessor>> = BTreeMap::new();
         let mut channels = Vec::new();
         let mut samplers = Vec::new();
-        for (&joint, track) in s.joints.iter().zip(&s.poses) {
+        for (&joint, keys) in k.joints.iter().zip(&k.channels) {
             let parts = [
                 (
                     json::animation::Property::Translation,
-                    translations(track),
+                    &keys.translation.times,
+                    keys.translation
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect::<Vec<f32>>(),
                     Type::Vec3,
                 ),
                 (
                     json::animation::Property::Rotation,
-                    rotations(track),
+                    &keys.rotation.times,
+                    keys.rotation
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect(),
                     Type::Vec4,
                 ),
-                (json::animation::Property::Scale, scales(track), Type::Vec3),
+                (
+                    json::animation::Property::Scale,
+                    &keys.scale.times,
+                    keys.scale
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect(),
+                    Type::Vec3,
+                ),
             ];
-            for (path, values, ty) in parts {
+            for (path, times, values, ty) in parts {
+                let bits: Vec<u32> = times.iter().map(|t| t.to_bits()).collect();
+                let input = match inputs.get(&bits) {
+                    Some(&a) => a,
+                    None => {
+                        let a =
+                            self.bin
+                                .floats(&mut self.root, times, Type::Scalar, Use::Other, true);
+                        inputs.insert(bits, a);
+                        a
+                    }
+                };
                 let output = self
                     .bin
                     .floats(&mut self.root, &values, ty, Use::Other, false);
@@ -550,7 +580,7 @@ impl Builder {
             }
         }
         self.report.animations += 1;
-        self.report.frames += s.times.len();
+        self.report.keys += k.key_count();
         self.root.push(json::Animation {
             extensions: None,
             extras: Default::default(),

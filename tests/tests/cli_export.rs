@@ -111,9 +111,12 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
             b.bind_local()[k]
         );
     }
-    // Meshes: LOD 0 of each, triangle by triangle.
-    assert_eq!(src.meshes.len(), back.meshes.len(), "{label}: mesh count");
-    for (m, mb) in src.meshes.iter().zip(&back.meshes) {
+    // Meshes: LOD 0 of each mesh of the default body (what the default scene holds), triangle by
+    // triangle.
+    let body = sinew_pipeline::body::select(src, &Default::default()).unwrap();
+    assert_eq!(body.len(), back.meshes.len(), "{label}: mesh count");
+    for (m, mb) in body.iter().map(|&i| &src.meshes[i]).zip(&back.meshes) {
+        assert_eq!(m.name, mb.name, "{label}: mesh names");
         let (l, lb) = (&m.lods[0], &mb.lods[0]);
         assert_eq!(
             l.triangle_count(),
@@ -172,7 +175,7 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
         frames += n;
         clips += 1;
     }
-    (src.meshes.len(), clips, frames)
+    (body.len(), clips, frames)
 }
 
 /// Keys over every sampler of every animation, counted from the file's own JSON (each sampler's
@@ -261,7 +264,15 @@ fn a_compressed_clip_exports_what_it_decodes_to() {
     let asset = source_asset(&compressed);
     assert!(asset.clips.iter().any(Clip::is_compressed));
     let r = round_trip(&compressed, "glb");
-    assert!(r["lod_meshes"].as_u64().unwrap() >= 1, "{r}");
+    // The file's LODs are left out of the default scene, with a note.
+    assert_eq!(r["lod_meshes"], 0, "{r}");
+    assert!(
+        r["notes"].as_array().unwrap().iter().any(|n| n
+            .as_str()
+            .unwrap()
+            .contains("LOD meshes are not exported; --variants")),
+        "{r}"
+    );
 }
 
 #[test]
@@ -307,10 +318,14 @@ fn half_life_textures_are_embedded_as_png() {
 }
 
 #[test]
-fn lods_go_behind_msft_lod_and_lod0_stays_in_the_scene() {
+fn with_variants_lods_go_behind_msft_lod_and_lod0_stays_in_the_scene() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("biped.gltf");
-    let r = export(&fixture("biped.gltf"), &out, &["--lod", "0.5,0.25"]);
+    let r = export(
+        &fixture("biped.gltf"),
+        &out,
+        &["--lod", "0.5,0.25", "--variants"],
+    );
     assert_eq!(r["lod_meshes"], 2, "{r}");
     let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
@@ -427,4 +442,102 @@ fn bad_outputs_and_inputs_exit_2_naming_the_file() {
     ]);
     assert_one_line_error(&r, &garbage);
     assert!(!out.exists());
+}
+
+/// The names of the mesh nodes in scene `i` of a `.gltf` document.
+fn scene_meshes(doc: &serde_json::Value, i: usize) -> Vec<String> {
+    doc["scenes"][i]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| &doc["nodes"][n.as_u64().unwrap() as usize])
+        .filter(|n| n.get("mesh").is_some())
+        .map(|n| n["name"].as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn the_default_scene_shows_the_default_body_and_variants_get_scenes_of_their_own() {
+    // man.mdl: a headless body and three heads (one body group of three choices).
+    let Some(path) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man.gltf");
+    let r = export(&path, &out, &["--lod", "0.5,0.25"]);
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(doc["scenes"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        scene_meshes(&doc, 0),
+        ["studio/reference_headless", "heads/reference_head1"]
+    );
+    // Nothing else is in the file: a viewer that imports every node (Blender) shows one model.
+    let mesh_nodes = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| n.get("mesh").is_some())
+        .count();
+    assert_eq!(mesh_nodes, 2);
+    assert_eq!(
+        (r["meshes"].as_u64(), r["lod_meshes"].as_u64()),
+        (Some(2), Some(0))
+    );
+    assert_eq!(
+        doc["extras"]["sinew"]["body"],
+        serde_json::json!(["studio/reference_headless", "heads/reference_head1"])
+    );
+    // Body 2: the third head.
+    let out2 = dir.path().join("man2.gltf");
+    export(&path, &out2, &["--body", "2"]);
+    let doc2: serde_json::Value = serde_json::from_slice(&std::fs::read(&out2).unwrap()).unwrap();
+    assert_eq!(
+        scene_meshes(&doc2, 0),
+        ["studio/reference_headless", "heads/reference_head3"]
+    );
+    // --variants: the model at LOD 1 and 2, then each other head, in scenes of their own; scene 0
+    // unchanged, its nodes listing their LODs in MSFT_lod.
+    let out3 = dir.path().join("man3.gltf");
+    let r3 = export(&path, &out3, &["--lod", "0.5,0.25", "--variants"]);
+    let doc3: serde_json::Value = serde_json::from_slice(&std::fs::read(&out3).unwrap()).unwrap();
+    let names: Vec<&str> = doc3["scenes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "sinew",
+            "LOD 1",
+            "LOD 2",
+            "heads/reference_head2",
+            "heads/reference_head3"
+        ]
+    );
+    assert_eq!(scene_meshes(&doc3, 0), scene_meshes(&doc, 0));
+    assert_eq!(scene_meshes(&doc3, 3), ["heads/reference_head2"]);
+    assert_eq!(r3["scenes"], 5);
+    assert_eq!(r3["other_meshes"], 2);
+    // Every scene starts with the skeleton's root, so each plays the same animations.
+    for s in doc3["scenes"].as_array().unwrap() {
+        assert_eq!(s["nodes"][0], doc3["scenes"][0]["nodes"][0]);
+    }
+    // An unknown body is a one-line error, exit 2.
+    let bad = sinew([
+        "export".as_ref(),
+        path.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("x.glb").as_os_str(),
+        "--body".as_ref(),
+        "3".as_ref(),
+    ]);
+    assert_one_line_error(&bad, &path);
+    assert!(
+        bad.stderr
+            .contains("body 3 does not exist; the file has 3 bodies"),
+        "{}",
+        bad.stderr
+    );
 }

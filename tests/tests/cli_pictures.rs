@@ -381,3 +381,44 @@ fn bake_preview_draws_the_written_cache() {
         "nothing written on a bad --preview"
     );
 }
+
+#[test]
+fn preview_draws_the_default_body_or_the_one_asked_for() {
+    let Some(man) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man.png");
+    let shown = |extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "preview".as_ref(),
+            man.as_os_str(),
+            "--clip".as_ref(),
+            "walk".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--json".as_ref(),
+        ];
+        args.extend(extra.iter().map(|s| std::ffi::OsStr::new(*s)));
+        let r = run_ok(&args);
+        (r["meshes"].clone(), r["triangles"].as_u64().unwrap())
+    };
+    assert_eq!(
+        shown(&[]),
+        (
+            serde_json::json!(["studio/reference_headless", "heads/reference_head1"]),
+            60 + 12
+        )
+    );
+    assert_eq!(
+        shown(&["--body", "1"]),
+        (
+            serde_json::json!(["studio/reference_headless", "heads/reference_head2"]),
+            60 + 6
+        )
+    );
+    assert_eq!(
+        shown(&["--mesh", "3"]).0,
+        serde_json::json!(["heads/reference_head3"])
+    );
+}

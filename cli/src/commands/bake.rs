@@ -149,11 +149,14 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         bail!("give --clip or --layer, not both");
     }
     let asset = load_asset(&args.file, &args.import, args.lod > 0)?;
+    let meshes = crate::steps::body_meshes(&asset, &args.body)
+        .with_context(|| format!("{shown}"))?
+        .unwrap_or_default();
     let request = BakeRequest {
         clips: args.clip.clone(),
         layers,
         fps: args.fps,
-        mesh: args.mesh,
+        meshes,
         lod: args.lod,
         vertex_order: match args.vertex_order {
             VertexOrderArg::Split => VertexOrder::Split,

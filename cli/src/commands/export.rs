@@ -45,11 +45,17 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let game = crate::report::game::game_report(&loaded.asset.game)
         .map(|g| serde_json::to_value(g).context("encoding the game data"))
         .transpose()?;
+    let meshes =
+        crate::steps::body_meshes(&loaded.asset, &args.body).with_context(|| shown.clone())?;
     let (bytes, report) = export::export(
         &loaded.asset,
         &loaded.images,
         container,
-        &ExportOptions { game },
+        &ExportOptions {
+            game,
+            meshes,
+            variants: args.variants,
+        },
     )
     .map_err(anyhow::Error::msg)
     .with_context(|| shown.clone())?;
@@ -76,8 +82,8 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
 pub fn human(r: &ExportCmdReport) -> String {
     let e = &r.export;
     let mut s = format!(
-        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes), {} materials, {} images, {} animations ({} keys)\n",
-        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.materials, e.images, e.animations, e.keys
+        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes, +{} other meshes, {} scenes), {} materials, {} images, {} animations ({} keys)\n",
+        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.other_meshes, e.scenes, e.materials, e.images, e.animations, e.keys
     );
     for n in &e.notes {
         s.push_str(&format!("  note: {n}\n"));

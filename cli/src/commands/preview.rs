@@ -71,12 +71,15 @@ pub fn run(args: &PreviewArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| shown.clone());
+    let meshes =
+        crate::steps::body_meshes(&loaded.asset, &args.body).with_context(|| shown.clone())?;
     let opts = SheetOptions {
         up,
         clip: args.clip.clone(),
         frames: args.frames,
         names: args.names,
         title,
+        meshes,
     };
     let (png, sheet) = contact_sheet(&loaded.asset, &opts).with_context(|| shown.clone())?;
     write_atomic(&args.output, &png)?;

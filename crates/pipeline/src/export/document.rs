@@ -5,6 +5,7 @@
 
 use super::animation::{key_clip, tolerances, unit, KeyedClip};
 use super::buffer::{Bin, Use};
+use crate::body::{self, BodyChoice};
 use gltf_json as json;
 use json::accessor::Type;
 use json::validation::Checked::Valid;
@@ -37,10 +38,15 @@ pub struct ExportImage {
 pub struct ExportReport {
     /// Joint nodes.
     pub joints: usize,
-    /// glTF meshes of LOD 0 (one per exported sinew mesh).
+    /// glTF meshes of the model in the default scene (LOD 0 of each mesh of its body).
     pub meshes: usize,
-    /// Further glTF meshes holding LODs 1 and up (behind `MSFT_lod`).
+    /// Further glTF meshes holding LODs 1 and up (`--variants`: behind `MSFT_lod`, in scenes
+    /// `LOD 1` ...).
     pub lod_meshes: usize,
+    /// LOD 0 of the meshes outside the model's body (`--variants`: each in a scene of its own).
+    pub other_meshes: usize,
+    /// glTF scenes (1 without `--variants`).
+    pub scenes: usize,
     /// Materials.
     pub materials: usize,
     /// Embedded images.
@@ -67,9 +73,21 @@ pub struct Built {
 /// The generator string written in `asset.generator`.
 pub const GENERATOR: &str = concat!("sinew ", env!("CARGO_PKG_VERSION"));
 
-/// Builds the document. `images` are matched to materials by [`ExportImage::key`]; `game` is the
-/// file's game data as JSON (written under `extras.sinew.game`), when the caller has it.
-pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Built {
+/// Options of one export.
+#[derive(Debug, Clone, Default)]
+pub struct ExportOptions {
+    /// The file's game data as JSON, written under `extras.sinew.game` (the CLI passes the same object
+    /// `inspect --json` prints).
+    pub game: Option<Value>,
+    /// The meshes that make the model in the default scene, or `None` for the default body
+    /// ([`crate::body`]).
+    pub meshes: Option<Vec<usize>>,
+    /// Also write every other mesh and every LOD, each in a scene of its own.
+    pub variants: bool,
+}
+
+/// Builds the document. `images` are matched to materials by [`ExportImage::key`].
+pub fn build(asset: &Asset, images: &[ExportImage], options: &ExportOptions) -> Built {
     let mut b = Builder {
         root: json::Root::default(),
         bin: Bin::default(),
@@ -85,10 +103,10 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
         .clone()
         .filter(|s| !s.is_empty())
         .map(Arc::new);
-    let mut scene_nodes = Vec::new();
+    let mut roots = Vec::new();
     let mut skin = None;
     if let Some(s) = &skeleton {
-        let mut roots = b.joints(s);
+        roots = b.joints(s);
         if roots.len() > 1 {
             // glTF wants the joints of a skin under one common root: a plain node (not a joint,
             // identity transform) holds the skeleton's roots.
@@ -100,14 +118,31 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
             roots = vec![holder];
         }
         skin = Some(b.skin(s, &roots));
-        scene_nodes.extend(roots);
     }
     let textures = b.textures(asset, images);
     let materials = b.materials(asset, &textures, images);
+    let model: Vec<usize> = match &options.meshes {
+        Some(m) => m
+            .iter()
+            .copied()
+            .filter(|&i| i < asset.meshes.len())
+            .collect(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    // Per mesh: its nodes by LOD level (LOD 0 first).
+    let mut mesh_nodes: Vec<Vec<(usize, Index<json::Node>)>> = vec![Vec::new(); asset.meshes.len()];
     let mut lods_used = false;
-    for (mi, mesh) in asset.meshes.iter().enumerate() {
+    let in_model = |mi: &usize| model.contains(mi);
+    let order: Vec<usize> = model
+        .iter()
+        .copied()
+        .chain((0..asset.meshes.len()).filter(|mi| options.variants && !in_model(mi)))
+        .collect();
+    for mi in order {
+        let mesh = &asset.meshes[mi];
+        let levels = if options.variants { mesh.lods.len() } else { 1 };
         let mut nodes = Vec::new();
-        for (level, lod) in mesh.lods.iter().enumerate() {
+        for (level, lod) in mesh.lods.iter().enumerate().take(levels) {
             let name = if level == 0 {
                 mesh.name.clone()
             } else {
@@ -138,33 +173,98 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
                     }
                 }));
                 b.report.lod_meshes += 1;
-            } else {
+            } else if in_model(&mi) {
                 b.report.meshes += 1;
+            } else {
+                b.report.other_meshes += 1;
             }
-            nodes.push(b.root.push(json::Node {
-                mesh: Some(m),
-                name: Some(name),
-                skin: if skinned { skin } else { None },
-                ..Default::default()
-            }));
+            nodes.push((
+                level,
+                b.root.push(json::Node {
+                    mesh: Some(m),
+                    name: Some(name),
+                    skin: if skinned { skin } else { None },
+                    ..Default::default()
+                }),
+            ));
         }
-        let Some((&first, rest)) = nodes.split_first() else {
-            continue;
-        };
-        if !rest.is_empty() {
-            lods_used = true;
-            let mut others = Map::new();
-            others.insert(
-                "MSFT_lod".to_string(),
-                js!({ "ids": rest.iter().map(|n| n.value()).collect::<Vec<_>>() }),
-            );
-            b.root.nodes[first.value()].extensions = Some(json::extensions::scene::Node { others });
+        if let Some((&(_, first), rest)) = nodes.split_first() {
+            if !rest.is_empty() {
+                lods_used = true;
+                let mut others = Map::new();
+                others.insert(
+                    "MSFT_lod".to_string(),
+                    js!({ "ids": rest.iter().map(|(_, n)| n.value()).collect::<Vec<_>>() }),
+                );
+                b.root.nodes[first.value()].extensions =
+                    Some(json::extensions::scene::Node { others });
+            }
         }
-        scene_nodes.push(first);
+        mesh_nodes[mi] = nodes;
     }
     if lods_used {
         b.root.extensions_used.push("MSFT_lod".to_string());
     }
+    // Scene 0: the model at LOD 0. With variants: the model at each further LOD, then each other
+    // mesh, every scene with the skeleton.
+    let scene = |name: String, nodes: Vec<Index<json::Node>>| json::Scene {
+        extensions: None,
+        extras: Default::default(),
+        name: Some(name),
+        nodes: roots.iter().copied().chain(nodes).collect(),
+    };
+    let at_level = |mi: usize, level: usize| {
+        mesh_nodes[mi]
+            .iter()
+            .find(|(l, _)| *l == level)
+            .map(|(_, n)| *n)
+    };
+    let mut scenes = vec![scene(
+        "sinew".to_string(),
+        model.iter().filter_map(|&mi| at_level(mi, 0)).collect(),
+    )];
+    if options.variants {
+        let top = model
+            .iter()
+            .map(|&mi| asset.meshes[mi].lods.len())
+            .max()
+            .unwrap_or(0);
+        for level in 1..top {
+            let nodes: Vec<_> = model.iter().filter_map(|&mi| at_level(mi, level)).collect();
+            if !nodes.is_empty() {
+                scenes.push(scene(format!("LOD {level}"), nodes));
+            }
+        }
+        for (mi, mesh) in asset.meshes.iter().enumerate() {
+            if !in_model(&mi) {
+                if let Some(n) = at_level(mi, 0) {
+                    scenes.push(scene(mesh.name.clone(), vec![n]));
+                }
+            }
+        }
+    } else {
+        let others: Vec<&str> = (0..asset.meshes.len())
+            .filter(|mi| !in_model(mi))
+            .map(|mi| asset.meshes[mi].name.as_str())
+            .collect();
+        if !others.is_empty() {
+            b.report.notes.push(format!(
+                "{} meshes outside the model's body are not exported ({}); --variants writes each in a scene of its own",
+                others.len(),
+                others.join(", ")
+            ));
+        }
+        let lods: usize = model
+            .iter()
+            .map(|&mi| asset.meshes[mi].lods.len().saturating_sub(1))
+            .sum();
+        if lods > 0 {
+            b.report.notes.push(format!(
+                "{lods} LOD meshes are not exported; --variants writes them behind MSFT_lod and in scenes of their own"
+            ));
+        }
+    }
+    b.report.scenes = scenes.len();
     let mut clips = Vec::new();
     let tol = tolerances(asset);
     for clip in &asset.clips {
@@ -216,16 +316,15 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
         })).collect::<Vec<_>>(),
         "notes": b.report.notes,
     });
-    if let Some(g) = game {
-        sinew["game"] = g;
+    if let Some(g) = &options.game {
+        sinew["game"] = g.clone();
     }
+    sinew["body"] = js!(model
+        .iter()
+        .map(|&mi| asset.meshes[mi].name.as_str())
+        .collect::<Vec<_>>());
     b.root.extras = raw(&js!({ "sinew": sinew }));
-    b.root.scenes.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: Some("sinew".to_string()),
-        nodes: scene_nodes,
-    });
+    b.root.scenes = scenes;
     b.root.scene = Some(Index::new(0));
     Built {
         root: b.root,

@@ -16,5 +16,5 @@ pub mod keys;
 pub mod write;
 
 pub use container::Container;
-pub use document::{ExportImage, ExportReport};
-pub use write::{export, ExportOptions};
+pub use document::{ExportImage, ExportOptions, ExportReport};
+pub use write::export;

@@ -7,6 +7,7 @@ use super::camera::{Fit, Up, View};
 use super::canvas::{Canvas, Cell, Rgb};
 use super::model::{bind_pose, draw_meshes, draw_skeleton, measured_error, pose, Posed, INK};
 use super::text;
+use crate::body::{self, BodyChoice};
 use sinew_core::format::Asset;
 use sinew_core::{Animator, Clip, Skeleton};
 use std::sync::Arc;
@@ -41,6 +42,8 @@ pub struct SheetOptions {
     pub names: bool,
     /// The title line (usually the file name).
     pub title: String,
+    /// The meshes drawn, or `None` for the model's default body ([`crate::body`]).
+    pub meshes: Option<Vec<usize>>,
 }
 
 impl Default for SheetOptions {
@@ -51,6 +54,7 @@ impl Default for SheetOptions {
             frames: 6,
             names: false,
             title: String::new(),
+            meshes: None,
         }
     }
 }
@@ -88,7 +92,9 @@ pub struct SheetReport {
     pub columns: u32,
     /// Rows of cells.
     pub rows: u32,
-    /// Triangles of LOD 0 over all meshes.
+    /// The meshes drawn (the model's body, or the ones asked for), by name.
+    pub meshes: Vec<String>,
+    /// Triangles of LOD 0 over all meshes drawn.
     pub triangles: usize,
     /// The LOD cells.
     pub lods: Vec<LodCellReport>,
@@ -162,6 +168,11 @@ pub fn contact_sheet(
     if opts.frames == 0 || opts.frames > MAX_FRAMES {
         return Err(SheetError::Frames(opts.frames));
     }
+    let chosen = match &opts.meshes {
+        Some(m) => m.clone(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    let asset = &body::only(asset, &chosen);
     let skeleton = asset
         .skeleton
         .clone()
@@ -366,6 +377,7 @@ pub fn contact_sheet(
             height,
             columns,
             rows,
+            meshes: asset.meshes.iter().map(|m| m.name.clone()).collect(),
             triangles: lod0_triangles,
             lods,
             clips: strips,

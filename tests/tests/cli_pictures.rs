@@ -422,3 +422,74 @@ fn preview_draws_the_default_body_or_the_one_asked_for() {
         serde_json::json!(["heads/reference_head3"])
     );
 }
+
+/// Columns of a cell (col, row 0 of a contact sheet) holding any pixel other than the cell's
+/// background.
+fn silhouette_width(px: &[u8], width: u32, col: u32) -> usize {
+    let (x0, y0, size) = (col * 256 + 2, 30 + 18, 252u32);
+    let at = |x: u32, y: u32| {
+        let i = ((y * width + x) * 3) as usize;
+        [px[i], px[i + 1], px[i + 2]]
+    };
+    // The cell's own background, from its top-left pixel.
+    let bg = at(x0 + 1, y0 + 1);
+    (x0..x0 + size)
+        .filter(|&x| (y0 + 20..y0 + size).any(|y| at(x, y) != bg))
+        .count()
+}
+
+#[test]
+fn front_is_front_by_the_files_own_axes() {
+    // The biped faces +Z (glTF's convention): seen from the front its arms spread wide, from the
+    // side it is narrow. No --up given.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("biped.png");
+    let r = run_ok(&[
+        "preview".as_ref(),
+        fixture("biped.sinew").as_os_str(),
+        "--clip".as_ref(),
+        "walk".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(
+        r["axes"],
+        serde_json::json!({"up": "+y", "forward": "+z", "bind_forward": "+z", "from": "file"})
+    );
+    let (w, _, px) = decode(&out);
+    let (front, side) = (silhouette_width(&px, w, 0), silhouette_width(&px, w, 1));
+    assert!(front > 2 * side, "front {front} px wide, side {side}");
+    // A Half-Life model states Z up, facing +X as it plays and -Y in its bind pose, and draws with
+    // its textures (man.mdl: five materials with images).
+    let Some(man) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let out = dir.path().join("man.png");
+    let r = run_ok(&[
+        "preview".as_ref(),
+        man.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(
+        r["axes"],
+        serde_json::json!({"up": "+z", "forward": "+x", "bind_forward": "-y", "from": "file"})
+    );
+    assert_eq!(r["textured_materials"], 5);
+    // --up overrides the file, with that axis's convention for both poses.
+    let r = run_ok(&[
+        "preview".as_ref(),
+        man.as_os_str(),
+        "--up".as_ref(),
+        "z".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(r["axes"]["from"], "--up");
+    assert_eq!(r["axes"]["bind_forward"], "+x");
+}

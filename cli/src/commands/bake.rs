@@ -104,7 +104,7 @@ fn cache_picture(
             })
             .unwrap_or_else(|| format!("frame {f}"))
     };
-    let up = super::preview::up_axis(args.up, &args.file, !asset.game.is_empty());
+    let (axes, _) = super::preview::picture_axes(args.up, &args.file, asset);
     let title = format!(
         "{}  |  {} frames x {} vertices at {} fps (as stored)",
         Path::new(&shown)
@@ -115,9 +115,15 @@ fn cache_picture(
         frames.vertex_count,
         fps
     );
-    cache_strip(&frames, &baked.indices, up, &title, label)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| shown.clone())
+    cache_strip(
+        &frames,
+        &baked.indices,
+        sinew_pipeline::preview::camera::Facing::of(axes, false),
+        &title,
+        label,
+    )
+    .map_err(anyhow::Error::msg)
+    .with_context(|| shown.clone())
 }
 
 /// Runs `sinew bake`.

@@ -97,6 +97,9 @@ pub struct Loaded {
     pub asset: Asset,
     /// Images found for the materials' textures.
     pub images: Vec<ExportImage>,
+    /// The same images decoded to RGBA (those the source carries, and PNG files found beside it),
+    /// named by the materials' `texture` strings: what pictures draw.
+    pub decoded: Vec<sinew_scene::Image>,
 }
 
 /// Loads FILE as the runtime would see it: a `.sinew` is decoded as stored (compressed clips stay
@@ -127,6 +130,7 @@ pub fn load(
         format::read(&bytes).with_context(|| format!("{shown}: reading the compiled asset back"))?
     };
     let mut images = Vec::new();
+    let mut decoded = scene_images.clone();
     for img in &scene_images {
         let bytes = sinew_pipeline::texture::encode_png(img).map_err(anyhow::Error::msg)?;
         images.push(ExportImage {
@@ -144,10 +148,17 @@ pub fn load(
             continue;
         }
         if let Some(img) = texture_file(dir, t) {
+            if img.mime == "image/png" {
+                decoded.extend(sinew_pipeline::texture::decode_png(&img.key, &img.bytes));
+            }
             images.push(img);
         }
     }
-    Ok(Loaded { asset, images })
+    Ok(Loaded {
+        asset,
+        images,
+        decoded,
+    })
 }
 
 /// A PNG or JPEG file named by a material, relative to the input's folder; `None` when it is not

@@ -100,6 +100,7 @@ fn compile_parts(scene: &Scene, clips: Option<Vec<Clip>>) -> Result<Asset, Compi
         source_vertex,
         masks: scene.masks.clone(),
         game: scene.game.clone(),
+        axes: scene.axes,
     };
     format::validate(&asset)?;
     Ok(asset)

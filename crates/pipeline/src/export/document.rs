@@ -319,6 +319,13 @@ pub fn build(asset: &Asset, images: &[ExportImage], options: &ExportOptions) -> 
     if let Some(g) = &options.game {
         sinew["game"] = g.clone();
     }
+    if let Some(a) = asset.axes {
+        sinew["axes"] = js!({
+            "up": a.up.name(),
+            "forward": a.forward.name(),
+            "bind_forward": a.bind_forward.name(),
+        });
+    }
     sinew["body"] = js!(model
         .iter()
         .map(|&mi| asset.meshes[mi].name.as_str())

@@ -39,6 +39,7 @@ pub fn import_options(args: &ImportArgs) -> ImportOptions {
             PositionKeys::Auto => PositionKeyRule::Auto,
         },
         gltf_skin: args.gltf_skin,
+        allow_missing: args.allow_missing,
     }
 }
 

@@ -23,7 +23,7 @@ fn read_with(files: &[(String, Vec<u8>)], present: &[&str]) -> (StudioModel, Vec
             .map(|(_, b)| b.clone())
             .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not found"))
     };
-    let (m, d) = mdl::read("fixtures/rig.mdl", &files[0].1, &resolve).unwrap();
+    let (m, d) = mdl::read("fixtures/rig.mdl", &files[0].1, &resolve, false).unwrap();
     (m, d.into_iter().map(|d| d.message).collect())
 }
 

@@ -192,11 +192,13 @@ pub fn texture_companion(file: &str) -> String {
     format!("{stem}T.mdl")
 }
 
-/// Reads an MDL and its companions (through `resolve`).
+/// Reads an MDL and its companions (through `resolve`). A companion that cannot be read is an error
+/// naming it, or with `allow_missing` a warning (what needs it is left out).
 pub fn read(
     file: &str,
     bytes: &[u8],
     resolve: Resolver<'_>,
+    allow_missing: bool,
 ) -> Result<(StudioModel, Vec<Diagnostic>), ImportError> {
     let f = Bytes { file, b: bytes };
     check_magic(&f)?;
@@ -382,6 +384,13 @@ pub fn read(
                 let name = dir_of_group(group)?;
                 match resolve(&name) {
                     Ok(b) => group_files[group] = Some(b),
+                    Err(e) if !allow_missing => {
+                        return Err(f.err(
+                            sec,
+                            o + 156,
+                            format!("cannot read sequence group file {name} for sequence {label:?}: {e} (--allow-missing converts without it)"),
+                        ))
+                    }
                     Err(e) => diagnostics.push(Diagnostic::warning(
                         "mdl-missing-sequence-group",
                         format!("sequence group file {name} ({e}): sequence {label:?} left out"),
@@ -438,6 +447,13 @@ pub fn read(
         let name = texture_companion(file);
         match resolve(&name) {
             Ok(b) => Some(b),
+            Err(e) if !allow_missing => {
+                return Err(f.err(
+                    "textures",
+                    180,
+                    format!("the model keeps its textures in {name}, which cannot be read: {e} (--allow-missing converts without them)"),
+                ))
+            }
             Err(e) => {
                 diagnostics.push(Diagnostic::warning(
                     "mdl-missing-textures",

@@ -322,7 +322,10 @@ fn a_missing_companion_is_an_error_naming_it_or_with_allow_missing_a_warning() {
         ("man.mdl", "textures", &Location::Offset(180)),
         "{e}"
     );
-    assert!(e.message.contains("manT.mdl") && e.message.contains("not here"), "{e}");
+    assert!(
+        e.message.contains("manT.mdl") && e.message.contains("not here"),
+        "{e}"
+    );
     let allowed = ImportOptions {
         allow_missing: true,
         ..ImportOptions::default()

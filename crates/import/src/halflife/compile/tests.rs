@@ -221,7 +221,10 @@ fn a_missing_smd_is_an_error_naming_file_line_and_command_unless_allowed() {
         (1, [3.0, 0.0, 0.0]),
         (1, [2.0, 1.0, 0.0]),
     ]);
-    let list = [("r.smd", r), ("inc.qci", "\n$sequence s \"lost\"\n".to_string())];
+    let list = [
+        ("r.smd", r),
+        ("inc.qci", "\n$sequence s \"lost\"\n".to_string()),
+    ];
     let have = files(&list);
     // By default the first missing SMD stops the compile, as in studiomdl; an SMD named in an
     // included file is reported at that file's line.

@@ -86,6 +86,20 @@ fn qc_companions(qc: &Path, import: &ImportArgs) -> BTreeSet<PathBuf> {
     asked.into_inner().unwrap_or_default().into_iter().collect()
 }
 
+/// The files an MDL's header names beside it (texture file, sequence groups); none when it cannot
+/// be read (its conversion will say why).
+fn mdl_companions(mdl: &Path) -> BTreeSet<PathBuf> {
+    let dir = mdl.parent().map(Path::to_path_buf).unwrap_or_default();
+    let name = mdl.display().to_string();
+    std::fs::read(mdl)
+        .ok()
+        .and_then(|b| sinew_import::halflife::mdl::companions(&name, &b).ok())
+        .into_iter()
+        .flatten()
+        .map(|c| normal(&dir.join(c)))
+        .collect()
+}
+
 /// Output names in one folder: `<stem>.sinew`, or `<file name>.sinew` for inputs whose stems collide.
 fn names_in(folder_inputs: &[&Path]) -> anyhow::Result<Vec<OsString>> {
     let mut stems: HashMap<OsString, usize> = HashMap::new();
@@ -119,7 +133,7 @@ pub struct Passed {
     pub path: PathBuf,
     /// What its content says it is.
     pub kind: FileKind,
-    /// The QC that names it, when one does (found while planning).
+    /// The QC or MDL that names it, when one does (found while planning).
     pub read_by: Option<PathBuf>,
 }
 
@@ -160,10 +174,13 @@ pub fn plan(inputs: &[PathBuf], out_dir: &Path, import: &ImportArgs) -> anyhow::
         }
         let mut companions: BTreeMap<PathBuf, PathBuf> = BTreeMap::new();
         for (f, format) in &models {
-            if *format == Format::Qc {
-                for c in qc_companions(f, import) {
-                    companions.entry(c).or_insert_with(|| f.clone());
-                }
+            let named = match format {
+                Format::Qc => qc_companions(f, import),
+                Format::Mdl => mdl_companions(f),
+                _ => continue,
+            };
+            for c in named {
+                companions.entry(c).or_insert_with(|| f.clone());
             }
         }
         let mut kept = Vec::with_capacity(models.len());

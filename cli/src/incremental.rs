@@ -42,8 +42,10 @@ pub struct Record {
     pub writes: Vec<Stamp>,
     /// Warnings among the diagnostics.
     pub warnings: usize,
-    /// The fields of the input's entry in the JSON report (`files[]`) from `bytes` on.
-    pub report: serde_json::Map<String, serde_json::Value>,
+    /// The fields of the input's entry in the JSON report (`files[]`) from `bytes` on, as compact
+    /// JSON text (text, so that the record reads back exactly as written and its numbers print
+    /// back as they were).
+    pub report: String,
     /// BLAKE3 of the record serialised compactly with this field empty.
     pub checksum: String,
 }
@@ -56,7 +58,7 @@ impl Record {
         reads: Vec<Stamp>,
         writes: Vec<Stamp>,
         warnings: usize,
-        report: serde_json::Map<String, serde_json::Value>,
+        report: String,
     ) -> Record {
         let mut r = Record {
             format: FORMAT.to_string(),
@@ -114,7 +116,15 @@ impl Record {
         if r.checksum != r.digest() {
             return Err("corrupt: its checksum does not match its content".to_string());
         }
+        if r.report_fields().is_none() {
+            return Err("corrupt: its report is not a JSON object".to_string());
+        }
         Ok(r)
+    }
+
+    /// The recorded report fields.
+    pub fn report_fields(&self) -> Option<crate::report::RecordedFields> {
+        crate::report::RecordedFields::parse(&self.report)
     }
 }
 
@@ -219,8 +229,7 @@ mod tests {
         let output = dir.join("out/in.sinew");
         std::fs::create_dir_all(output.parent().unwrap()).unwrap();
         std::fs::write(&output, b"SINEW").unwrap();
-        let mut report = serde_json::Map::new();
-        report.insert("bytes".into(), 5.into());
+        let report = r#"{"bytes":5,"clips":[{"max_error":0.1}]}"#.to_string();
         Record::new(
             "opts",
             (&input, &output),

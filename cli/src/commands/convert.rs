@@ -296,10 +296,13 @@ fn write_built(
     let Some(r) = &plan.record else {
         return Ok(());
     };
-    let report = match serde_json::to_value(&built.details) {
-        Ok(serde_json::Value::Object(m)) => m,
-        _ => bail!("{}: encoding the incremental record", job.output.display()),
-    };
+    // As text, as the JSON report prints it (an f32 as its shortest digits).
+    let report = serde_json::to_string(&built.details).map_err(|e| {
+        anyhow!(
+            "{}: encoding the incremental record: {e}",
+            job.output.display()
+        )
+    })?;
     let writes = built
         .files
         .iter()
@@ -336,7 +339,7 @@ fn file_report(job: &Job, outcome: Outcome, strict: bool) -> FileReport {
         }
         Outcome::Reused(rec) => {
             f.status = "reused";
-            f.recorded = Some(rec.report);
+            f.recorded = rec.report_fields();
         }
         Outcome::Failed(e) => {
             f.status = "failed";

@@ -190,7 +190,56 @@ pub struct FileReport {
     pub details: Option<OutputDetails>,
     /// For `reused`: the same fields as recorded when the output was written.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
-    pub recorded: Option<serde_json::Map<String, serde_json::Value>>,
+    pub recorded: Option<RecordedFields>,
+}
+
+/// The report fields recorded for a kept output, in their order, each exactly as the JSON text it
+/// was written as (so a number prints back digit for digit).
+#[derive(Debug)]
+pub struct RecordedFields(pub Vec<(String, Box<serde_json::value::RawValue>)>);
+
+impl Serialize for RecordedFields {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl RecordedFields {
+    /// The fields of a JSON object's text, in order; `None` when it is not an object.
+    pub fn parse(text: &str) -> Option<RecordedFields> {
+        struct Fields;
+        impl<'de> serde::de::Visitor<'de> for Fields {
+            type Value = RecordedFields;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<RecordedFields, A::Error> {
+                let mut out = Vec::new();
+                while let Some(entry) = map.next_entry()? {
+                    out.push(entry);
+                }
+                Ok(RecordedFields(out))
+            }
+        }
+        let mut de = serde_json::Deserializer::from_str(text);
+        let fields = serde::Deserializer::deserialize_map(&mut de, Fields).ok()?;
+        de.end().ok()?;
+        Some(fields)
+    }
+
+    /// One field, decoded.
+    pub fn get(&self, key: &str) -> Option<serde_json::Value> {
+        let (_, raw) = self.0.iter().find(|(k, _)| k == key)?;
+        serde_json::from_str(raw.get()).ok()
+    }
 }
 
 /// What one written `.sinew` holds and how it was made.
@@ -256,13 +305,9 @@ impl FileReport {
         if let Some(d) = &self.details {
             return warning_pairs(d);
         }
-        let recorded = self
-            .recorded
-            .as_ref()
-            .and_then(|r| r.get("diagnostics"))
-            .and_then(|d| d.as_array());
-        recorded
-            .into_iter()
+        let recorded = self.recorded.as_ref().and_then(|r| r.get("diagnostics"));
+        let list = recorded.as_ref().and_then(|d| d.as_array());
+        list.into_iter()
             .flatten()
             .filter(|x| x.get("level").and_then(|l| l.as_str()) == Some("warning"))
             .map(|x| {

@@ -326,6 +326,11 @@ fn a_missing_companion_is_an_error_naming_it_or_with_allow_missing_a_warning() {
         e.message.contains("manT.mdl") && e.message.contains("not here"),
         "{e}"
     );
+    // What the header names, used or not (no sequence of man.mdl is in group 1).
+    assert_eq!(
+        sinew_import::halflife::mdl::companions("models/man.mdl", &bytes).unwrap(),
+        ["manT.mdl", "man01.mdl"]
+    );
     let allowed = ImportOptions {
         allow_missing: true,
         ..ImportOptions::default()

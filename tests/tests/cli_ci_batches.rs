@@ -300,15 +300,13 @@ fn strict_fails_every_input_with_a_warning_and_writes_nothing_for_it() {
         "mdl/manT.mdl",
         "mdl/man01.mdl",
     ];
-    let Some(()) = copy_in(dir.path(), &inputs) else {
+    let models = dir.path().join("models");
+    std::fs::create_dir_all(&models).unwrap();
+    let Some(()) = copy_in(&models, &inputs) else {
         return;
     };
     let out = dir.path().join("out");
-    let (code, v, err) = convert(&[
-        dir.path().as_os_str(),
-        "--out-dir".as_ref(),
-        out.as_os_str(),
-    ]);
+    let (code, v, err) = convert(&[models.as_os_str(), "--out-dir".as_ref(), out.as_os_str()]);
     assert_eq!(code, 0, "{err}");
     let cube = v["files"]
         .as_array()
@@ -346,7 +344,7 @@ fn strict_fails_every_input_with_a_warning_and_writes_nothing_for_it() {
 
     let strict_out = dir.path().join("strict");
     let (code, v, err) = convert(&[
-        dir.path().as_os_str(),
+        models.as_os_str(),
         "--out-dir".as_ref(),
         strict_out.as_os_str(),
         "--strict".as_ref(),
@@ -368,7 +366,7 @@ fn strict_fails_every_input_with_a_warning_and_writes_nothing_for_it() {
         .find(|f| f["status"] == "failed")
         .unwrap();
     let e = failed["error"].as_str().unwrap();
-    let obj = dir.path().join("cube_mtllib_after_g.obj");
+    let obj = models.join("cube_mtllib_after_g.obj");
     assert!(
         e.starts_with(&format!("{}: --strict: {n} warning", obj.display())),
         "{e}"

@@ -16,6 +16,7 @@ record per output under ``out_dir/.sinew-incremental/``, so tasks never share a 
 from __future__ import annotations
 
 import os
+import uuid
 from typing import Any, Iterable, List, Optional
 
 from . import _options, _sinew
@@ -92,9 +93,13 @@ def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = Non
 
         order = sorted(range(len(pairs)), key=lambda i: (-size(pairs[i][0]), i))
         futures = {}
+        # Keys unique to this call: a key the cluster still holds from an earlier call would hand
+        # back that call's result instead of running the task.
+        call = uuid.uuid4().hex[:12]
         for i in order:
             src, out = pairs[i]
-            futures[i] = client.submit(_convert_task, src, out, args, key=f"sinew-convert-{i}-{os.path.basename(src)}",
+            futures[i] = client.submit(_convert_task, src, out, args,
+                                       key=f"sinew-convert-{call}-{i}-{os.path.basename(src)}",
                                        pure=False, retries=retries)
         if progress:
             from dask.distributed import progress as show_progress

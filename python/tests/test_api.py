@@ -144,19 +144,20 @@ def test_convert_takes_strict_incremental_and_allow_missing(corpus_dir, tmp_path
 
     folder = tmp_path / "models"
     folder.mkdir()
-    for rel in ["obj/cube_mtllib_after_g.obj", "ms3d/cross.ms3d", "mdl/manT.mdl"]:
+    # cube_mtllib_after_g.obj has warnings (its material library is not there), triangle.smd none.
+    for rel in ["obj/cube_mtllib_after_g.obj", "smd/triangle.smd", "mdl/manT.mdl"]:
         shutil.copy(corpus_dir / rel, folder / pathlib.Path(rel).name)
     report = sinew.convert(folder, out_dir=tmp_path / "out", strict=True, lod="none")
     statuses = {pathlib.Path(f["input"]).name: f["status"] for f in report["files"]}
-    assert statuses == {"cube_mtllib_after_g.obj": "failed", "cross.ms3d": "converted"}
+    assert statuses == {"cube_mtllib_after_g.obj": "failed", "triangle.smd": "converted"}
     assert report["strict"] is True and report["orphans"] == 1
     assert {pathlib.Path(s["file"]).name: s["reason"] for s in report["skipped"]} == {"manT.mdl": "orphaned-companion"}
     # A single input failed by --strict: the report says so (the command's exit code 1).
     one = sinew.convert(folder / "cube_mtllib_after_g.obj", tmp_path / "one.sinew", strict=True)
     assert one["failed"] == 1 and "--strict" in one["files"][0]["error"]
     assert not (tmp_path / "one.sinew").exists()
-    first = sinew.convert(folder / "cross.ms3d", tmp_path / "c.sinew", incremental=True)
-    again = sinew.convert(folder / "cross.ms3d", tmp_path / "c.sinew", incremental=True)
+    first = sinew.convert(folder / "triangle.smd", tmp_path / "c.sinew", incremental=True)
+    again = sinew.convert(folder / "triangle.smd", tmp_path / "c.sinew", incremental=True)
     assert (first["converted"], again["reused"]) == (1, 1)
     assert again["incremental"]["state"] == "used"
     alone = tmp_path / "alone"

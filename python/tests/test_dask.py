@@ -78,7 +78,8 @@ def test_convert_many_takes_the_command_lines_switches_and_reports_the_same(clie
 
     c, _ = client
     # cube_mtllib_after_g.obj has warnings (its material library is not there); the others none.
-    files = [corpus_dir / "obj/cube_mtllib_after_g.obj", corpus_dir / "ms3d/cross.ms3d", corpus_dir / "smd/triangle.smd"]
+    files = [corpus_dir / "obj/cube_mtllib_after_g.obj", corpus_dir / "smd/holy_grailref.smd",
+             corpus_dir / "smd/triangle.smd"]
     strict = convert_many(files, tmp_path / "strict", client=c, strict=True, lod="none")
     r = subprocess.run([str(sinew_bin), "--json", "convert", *map(str, files), "--out-dir", str(tmp_path / "cli"),
                         "--strict", "--lod", "none"], capture_output=True, text=True)
@@ -98,7 +99,7 @@ def test_convert_many_takes_the_command_lines_switches_and_reports_the_same(clie
     assert [e["status"] for e in again] == ["reused"] * 3
     for a, b in zip(first, again):
         assert {k: v for k, v in a.items() if k != "status"} == {k: v for k, v in b.items() if k != "status"}
-    assert (tmp_path / "inc" / ".sinew-incremental" / "cross.sinew.json").is_file()
+    assert (tmp_path / "inc" / ".sinew-incremental" / "triangle.sinew.json").is_file()
 
     # allow_missing: man.mdl without its texture file fails, and converts when allowed.
     alone = tmp_path / "alone"

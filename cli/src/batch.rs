@@ -276,8 +276,8 @@ pub fn skipped(passed: &[Passed], jobs: &[Job], reads: &[Vec<PathBuf>]) -> Vec<S
                     (
                         "orphaned-companion",
                         format!(
-                            "{what} that no model reads: its model{} is missing",
-                            expected_model(&p.path, p.kind)
+                            "{what} that no model reads: {}",
+                            orphan_reason(&p.path, p.kind)
                         ),
                     )
                 }
@@ -297,8 +297,25 @@ pub fn skipped(passed: &[Passed], jobs: &[Job], reads: &[Vec<PathBuf>]) -> Vec<S
         .collect()
 }
 
-/// ` (NAME.mdl)` for `NAMET.mdl` or `NAMEnn.mdl` by the GoldSrc naming rule, else nothing.
-fn expected_model(path: &Path, kind: FileKind) -> String {
+/// Why nobody reads an orphan: its model by the GoldSrc naming rule is missing, or is there and does
+/// not name it (it keeps its own textures, or names other group files).
+fn orphan_reason(path: &Path, kind: FileKind) -> String {
+    match expected_model(path, kind) {
+        Some(m) if path.with_file_name(&m).is_file() => format!(
+            "{m} beside it does not name it (it keeps its own {})",
+            if kind == FileKind::MdlTextures {
+                "textures"
+            } else {
+                "sequences, or names other group files"
+            }
+        ),
+        Some(m) => format!("its model ({m}) is missing"),
+        None => "no model in the folder names it".to_string(),
+    }
+}
+
+/// `NAME.mdl` for `NAMET.mdl` or `NAMEnn.mdl` by the GoldSrc naming rule.
+fn expected_model(path: &Path, kind: FileKind) -> Option<String> {
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -311,10 +328,7 @@ fn expected_model(path: &Path, kind: FileKind) -> String {
             .filter(|&n| stem.is_char_boundary(n) && stem[n..].bytes().all(|b| b.is_ascii_digit()))
             .map(|n| &stem[..n]),
     };
-    match base.filter(|b| !b.is_empty()) {
-        Some(b) => format!(" ({b}.mdl)"),
-        None => String::new(),
-    }
+    base.filter(|b| !b.is_empty()).map(|b| format!("{b}.mdl"))
 }
 
 #[cfg(test)]

@@ -446,7 +446,9 @@ mod tests {
         );
         let orphan = skipped(&batch.passed, jobs, &none);
         assert!(
-            orphan[0].message.contains("(man.mdl)"),
+            orphan[0]
+                .message
+                .contains("man.mdl beside it does not name it"),
             "{}",
             orphan[0].message
         );

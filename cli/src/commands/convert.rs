@@ -591,7 +591,15 @@ fn emit(report: &ConvertReport, ctx: &Ctx) -> anyhow::Result<()> {
             eprintln!("sinew: incremental record ignored: {r}");
         }
         for f in &report.files {
-            if let Some(d) = &f.details {
+            if f.status == "failed" {
+                // Errors are listed by `finish`; a failure by --strict also shows its warnings.
+                for (code, message) in f.warning_list().iter().filter(|_| f.details.is_some()) {
+                    eprintln!(
+                        "{}: not written (--strict): warning [{code}] {message}",
+                        f.input
+                    );
+                }
+            } else if let Some(d) = &f.details {
                 eprint!("{}", human_details(&f.input, &f.output, d));
             } else if f.status == "reused" {
                 eprintln!(

@@ -95,6 +95,10 @@ pub struct ImportArgs {
     /// glTF: index of the skin that becomes the skeleton (default: the first, with a note).
     #[arg(long, value_name = "N")]
     pub gltf_skin: Option<usize>,
+    /// Half-Life: convert without a file the model names that is missing (a QC's SMD, an MDL's
+    /// texture or sequence-group file), with a warning, instead of stopping with an error.
+    #[arg(long)]
+    pub allow_missing: bool,
 }
 
 /// `--ms3d-position-keys` values.
@@ -179,7 +183,7 @@ pub struct CompressArgs {
 /// `--effort`: the clip encoder's search effort.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
 pub enum EffortArg {
-    /// The default's candidates, only the smallest refined.
+    /// One key-reduction budget, the smallest candidate refined: a few times faster.
     Fast,
     /// The default search.
     #[default]
@@ -189,7 +193,7 @@ pub enum EffortArg {
 }
 
 /// `sinew convert`.
-#[derive(Debug, Args)]
+#[derive(Debug, Args, Clone)]
 pub struct ConvertArgs {
     /// Input files (.ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc, .sinew), or folders (with
     /// --out-dir): every model in a folder is converted, recognised by content.
@@ -211,6 +215,13 @@ pub struct ConvertArgs {
     /// Add each step's wall time (import, each LOD, each clip's encode, write) to the report.
     #[arg(long)]
     pub timings: bool,
+    /// Fail an input that raises any warning (nothing is written for it; a batch exits 1).
+    #[arg(long)]
+    pub strict: bool,
+    /// Keep the outputs of inputs whose files, options and sinew version are unchanged since they
+    /// were written (a record in OUT-DIR/.sinew-incremental/); redo the rest.
+    #[arg(long)]
+    pub incremental: bool,
     /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
     #[arg(long, value_name = "FILE")]
     pub anim: Vec<PathBuf>,

@@ -320,6 +320,27 @@ fn part(c: &SceneClip) -> PartReport {
     }
 }
 
+/// Refuses a scene with nothing to convert: no joint, no mesh and no clip (an empty glTF, an SMD
+/// without nodes, a QC whose SMDs were all left out), as an empty OBJ is refused by its importer.
+pub fn check_not_empty(scene: &Scene, file: &str) -> anyhow::Result<()> {
+    let joints = scene.skeleton.as_ref().map_or(0, |s| s.len());
+    if joints == 0 && scene.meshes.is_empty() && scene.clips.is_empty() {
+        let why: Vec<String> = scene
+            .diagnostics
+            .iter()
+            .filter(|d| d.level == sinew_scene::Level::Warning)
+            .map(|d| format!("[{}] {}", d.code, d.message))
+            .collect();
+        let why = if why.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", why.join("; "))
+        };
+        bail!("{file}: nothing to convert: the file holds no joint, mesh or clip{why}");
+    }
+    Ok(())
+}
+
 /// Checks every joint of the plan against the skeleton; the error names the file and the joint.
 pub fn check_split(scene: &Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<()> {
     if plan.is_empty() {

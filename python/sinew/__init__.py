@@ -102,9 +102,16 @@ def convert(src: Union[PathLike, Iterable[PathLike]], out: Optional[PathLike] = 
             out_dir: Optional[PathLike] = None, **options: Any) -> dict:
     """Converts one file to ``out`` (``.sinew``), or files and folders into ``out_dir``.
 
-    Returns the report of ``sinew convert --json``: ``inputs``, ``converted``, ``failed`` and
-    ``files`` (one entry per input with ``status``, ``error`` and what was written). A single input
-    that fails raises :class:`InputError`; in a batch (``out_dir``) failures are in the report.
+    Returns the report of ``sinew convert --json``: ``inputs``, ``converted``, ``reused``,
+    ``failed``, the warning summary (``warnings``, ``inputs_with_warnings``, ``warning_codes``),
+    ``files`` (one entry per input with ``status``, ``error``, ``warnings`` and what was written) and
+    ``skipped`` (what a folder walk passed over, with the reason). A single input that fails raises
+    :class:`InputError`; in a batch (``out_dir``) failures are in the report. The command line's
+    switches: ``strict=True`` fails an input with any warning (nothing written for it; the report
+    says ``failed``, also for a single input, as the command's exit code 1 does),
+    ``allow_missing=True`` converts a Half-Life model without its missing SMDs or companion files,
+    ``incremental=True`` keeps outputs whose files, options and sinew version are unchanged
+    (status ``reused``).
     """
     sources = [src] if isinstance(src, (str, os.PathLike)) else list(src)
     args = ["convert", *[os.fspath(s) for s in sources]]

@@ -222,6 +222,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn decodes_utf8_with_and_without_a_bom_and_replaces_invalid_bytes() {
+        assert_eq!(decode(b"HIERARCHY\nROOT Hips"), "HIERARCHY\nROOT Hips");
+        assert_eq!(decode("\u{feff}caf\u{e9}".as_bytes()), "caf\u{e9}");
+        // Latin-1 e-acute (0xE9) is not UTF-8: it becomes U+FFFD, the rest is kept.
+        assert_eq!(decode(b"# caf\xe9\nROOT"), "# caf\u{fffd}\nROOT");
+        assert_eq!(decode(b"\xef\xbb\xbfa\xffb"), "a\u{fffd}b");
+        assert_eq!(decode(&[0xFF, 0xFE, b'h', 0, b'i', 0]), "hi");
+    }
+
+    #[test]
     fn words_keep_quoted_spaces_and_drop_comments() {
         assert_eq!(
             words("0 \"Bip01 L Thigh\" -1 // a comment"),

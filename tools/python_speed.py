@@ -15,7 +15,8 @@ frame of the file (the 120 Hz of cmu_01_01.bvh):
   joint, stacked into one (frames, joints, 4, 4) array;
 - sinew: `sinew.load(path)`, then `asset.sample(0, asset.clips[0].times)` (the clip's key times,
   one per frame of the file).
-It prints the median, 25th and 75th percentile wall time of each and the ratio of the medians, then
+It prints the median, 25th and 75th percentile wall time of each (and of sinew's two calls) and the
+ratio of the medians, then
 checks that both computed the same motion: the largest distance between the joint positions of
 joints present in both (by name), in the file's units.
 """
@@ -41,9 +42,17 @@ def with_fairmotion():
     return [j.name for j in joints], out
 
 
+parts = {"sinew.load": [], "asset.sample": []}
+
+
 def with_sinew():
+    start = time.perf_counter()
     asset = sinew.load(path)
-    return list(asset.skeleton.names), asset.sample(0, asset.clips[0].times)
+    loaded = time.perf_counter()
+    out = asset.sample(0, asset.clips[0].times)
+    parts["sinew.load"].append((loaded - start) * 1000)
+    parts["asset.sample"].append((time.perf_counter() - loaded) * 1000)
+    return list(asset.skeleton.names), out
 
 
 def timed(f):
@@ -54,6 +63,8 @@ def timed(f):
 
 timed(with_fairmotion)
 timed(with_sinew)
+for v in parts.values():
+    v.clear()
 times = {"fairmotion": [], "sinew": []}
 for _ in range(rounds):
     ms, fm = timed(with_fairmotion)
@@ -63,6 +74,8 @@ for _ in range(rounds):
 for name, v in times.items():
     v = sorted(v)
     print(f"{name:10} median {statistics.median(v):9.1f} ms  p25 {v[len(v) // 4]:9.1f}  p75 {v[3 * len(v) // 4]:9.1f}")
+for name, v in parts.items():
+    print(f"  {name:12} median {statistics.median(v):7.1f} ms")
 ratio = statistics.median(times["fairmotion"]) / statistics.median(times["sinew"])
 print(f"ratio of medians: {ratio:.0f}x")
 

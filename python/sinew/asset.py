@@ -238,7 +238,7 @@ class Asset:
     materials: Tuple[Material, ...]
     masks: Tuple[Mask, ...]
     game: Optional[Dict[str, Any]]
-    _handle: Any = field(compare=False)
+    _handle: _sinew.AssetHandle = field(compare=False)
 
     def __repr__(self) -> str:
         joints = len(self.skeleton) if self.skeleton is not None else 0

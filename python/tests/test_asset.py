@@ -3,6 +3,7 @@ documented shapes and dtypes, read-only arrays, errors, and the GIL released whi
 
 import json
 import subprocess
+import sys
 import threading
 import time
 
@@ -296,3 +297,21 @@ def test_the_gil_is_released_while_sampling_and_skinning(corpus_dir):
         # This thread kept running Python while the other was inside sinew (30 ms or more).
         assert span["end"] - span["start"] >= 0.03
         assert len(inside) >= 5, (len(inside), span["end"] - span["start"])
+
+
+def test_every_public_name_is_documented_and_the_stubs_match_the_extension():
+    for name in sinew.__all__:
+        obj = getattr(sinew, name)
+        if callable(obj):
+            assert obj.__doc__ and obj.__doc__.strip(), name
+    for cls in [sinew.Asset, sinew.Skeleton, sinew.Clip, sinew.Lod]:
+        for name, member in vars(cls).items():
+            if callable(member) and not name.startswith("_"):
+                assert member.__doc__, f"{cls.__name__}.{name}"
+    mypy = pytest.importorskip("mypy")
+    assert mypy
+    r = subprocess.run([sys.executable, "-m", "mypy.stubtest", "sinew._sinew"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--strict",
+                        str(ROOT / "python" / "sinew" / "asset.py")], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr

@@ -2,6 +2,7 @@
 documented shapes and dtypes, read-only arrays, errors, and the GIL released while the runtime works."""
 
 import json
+import os
 import subprocess
 import sys
 import threading
@@ -299,7 +300,7 @@ def test_the_gil_is_released_while_sampling_and_skinning(corpus_dir):
         assert len(inside) >= 5, (len(inside), span["end"] - span["start"])
 
 
-def test_every_public_name_is_documented_and_the_stubs_match_the_extension():
+def test_every_public_name_is_documented_and_the_stubs_match_the_extension(tmp_path):
     for name in sinew.__all__:
         obj = getattr(sinew, name)
         if callable(obj):
@@ -310,8 +311,12 @@ def test_every_public_name_is_documented_and_the_stubs_match_the_extension():
                 assert member.__doc__, f"{cls.__name__}.{name}"
     mypy = pytest.importorskip("mypy")
     assert mypy
-    r = subprocess.run([sys.executable, "-m", "mypy.stubtest", "sinew._sinew"], capture_output=True, text=True)
+    # In a scratch directory: stubtest writes its cache to the working directory.
+    env = {**os.environ, "MYPY_CACHE_DIR": str(tmp_path / "mypy")}
+    r = subprocess.run([sys.executable, "-m", "mypy.stubtest", "sinew._sinew"], capture_output=True, text=True,
+                       env=env, cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
     r = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--strict",
-                        str(ROOT / "python" / "sinew" / "asset.py")], capture_output=True, text=True)
+                        str(ROOT / "python" / "sinew" / "asset.py")], capture_output=True, text=True, env=env,
+                       cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr

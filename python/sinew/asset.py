@@ -39,7 +39,7 @@ __all__ = ["load", "Asset", "Skeleton", "Clip", "Mesh", "Lod", "Material", "Mask
 PathLike = Union[str, "os.PathLike[str]"]
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Skeleton:
     """Joints in runtime order (every parent before its children); ``J`` joints.
 
@@ -77,7 +77,7 @@ class Skeleton:
         return f"Skeleton({len(self)} joints)"
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Clip:
     """One clip as the runtime plays it.
 
@@ -112,7 +112,7 @@ class Clip:
                 f"{', looping' if self.looping else ''}, {len(self.tracks)} tracks)")
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Lod:
     """One level of detail of a mesh: ``V`` vertices, ``F`` triangles, ``S`` submeshes.
 
@@ -159,7 +159,7 @@ class Lod:
         return f"Lod({len(self.positions)} vertices, {len(self.indices)} triangles)"
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Mesh:
     """A mesh and its LOD chain (LOD 0 is the source mesh)."""
 
@@ -170,7 +170,7 @@ class Mesh:
         return f"Mesh({self.name!r}, {len(self.lods)} LODs)"
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Material:
     """A material: ``name``, ``base_color`` (``(4,)`` float32 linear RGBA) and ``texture`` (a path or
     URI, or ``None``)."""
@@ -180,7 +180,7 @@ class Material:
     texture: Optional[str]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Mask:
     """A named per-joint weight mask (for masked blending).
 
@@ -215,7 +215,7 @@ def _out(out: Optional[np.ndarray], shape: Tuple[int, ...]) -> np.ndarray:
     return np.empty(shape, dtype=np.float32) if out is None else out
 
 
-@dataclass(frozen=True, repr=False)
+@dataclass(frozen=True, repr=False, eq=False)
 class Asset:
     """A file as sinew's runtime holds it. Build one with :func:`load`.
 

@@ -95,20 +95,23 @@ impl AssetHandle {
         })
     }
 
-    fn lod(&self, mesh: usize, lod: usize) -> PyResult<&Lod> {
+    fn lod(&self, mesh: usize, lod: i64) -> PyResult<&Lod> {
         let m = self.asset.meshes.get(mesh).ok_or_else(|| {
             self.usage(BakeError::NoMesh {
                 mesh,
                 count: self.asset.meshes.len(),
             })
         })?;
-        m.lods.get(lod).ok_or_else(|| {
-            self.usage(BakeError::NoLod {
-                lod,
-                mesh: m.name.clone(),
-                last: m.lods.len().saturating_sub(1),
+        let last = m.lods.len().saturating_sub(1);
+        usize::try_from(lod)
+            .ok()
+            .and_then(|l| m.lods.get(l))
+            .ok_or_else(|| {
+                self.usage(format!(
+                    "LOD {lod} does not exist; mesh {:?} has LODs 0..={last}",
+                    m.name
+                ))
             })
-        })
     }
 
     /// Everything the file holds, as a dict of read-only arrays, strings and numbers.
@@ -296,7 +299,7 @@ impl AssetHandle {
     }
 
     /// Vertices of LOD `lod` of mesh `mesh`, checked to be skinned.
-    fn skinned_vertex_count(&self, mesh: usize, lod: usize) -> PyResult<usize> {
+    fn skinned_vertex_count(&self, mesh: usize, lod: i64) -> PyResult<usize> {
         let l = self.lod(mesh, lod)?;
         if !l.is_skinned() {
             return Err(self.usage(BakeError::NotSkinned(self.asset.meshes[mesh].name.clone())));
@@ -396,13 +399,14 @@ impl AssetHandle {
         clip: usize,
         times: PyReadonlyArray1<'_, f32>,
         mesh: usize,
-        lod: usize,
+        lod: i64,
         wrap: bool,
         out: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
         let skeleton = self.skeleton()?.clone();
         let c = self.clip(clip)?.clone();
         let nv = self.skinned_vertex_count(mesh, lod)?;
+        let lod = usize::try_from(lod).map_err(|_| self.usage(format!("LOD {lod}")))?;
         let times = times
             .as_slice()
             .map_err(|_| UsageError::new_err("times must be contiguous"))?;

@@ -253,6 +253,10 @@ def test_errors(corpus_dir, tmp_path):
         asset.sample("walk", [[0.0]])
     with pytest.raises(sinew.UsageError, match="LOD 1 does not exist"):
         asset.skin("walk", [0.0], lod=1)
+    with pytest.raises(sinew.UsageError, match="LOD -1 does not exist"):
+        asset.skin("walk", [0.0], lod=-1)
+    with pytest.raises(sinew.UsageError, match="clip -1 does not exist"):
+        asset.sample(-1, [0.0])
     with pytest.raises(sinew.UsageError, match="mesh 5 does not exist"):
         asset.skin("walk", [0.0], mesh=5)
     with pytest.raises(sinew.UsageError, match='no mesh "x"'):

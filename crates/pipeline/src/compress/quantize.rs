@@ -6,6 +6,7 @@ use sinew_core::compressed::{
     compact_range_units, compact_rotation_range, dequant_params, pack, shared_indices,
     smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
 };
+use sinew_core::format::clip_record_size;
 use sinew_core::glam::Quat;
 use sinew_core::Clip;
 
@@ -83,6 +84,10 @@ pub(super) struct Layout {
     pub(super) ranges: Vec<[f32; 2]>,
     /// Per segment, per component (segment-major): the sub-range (`bits` is set later).
     pub(super) sub: Vec<SegmentComponent>,
+    /// Per segment: how many rotations store their index per key (2 bits per key each).
+    pub(super) per_key_index: Vec<usize>,
+    /// The record's size without its data (see [`Layout::record_size`]), once worked out.
+    fixed_size: std::sync::OnceLock<Option<usize>>,
 }
 
 /// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`.
@@ -146,11 +151,18 @@ impl Layout {
         let mut comps: Vec<Comp> = Vec::new();
         let mut starts: Vec<bool> = Vec::new();
         let mut index: Vec<Vec<u8>> = Vec::new();
+        let mut compensating = vec![false; rig.skeleton.len()];
+        for t in &work.tracks {
+            if let (Some(j), WChan::Keys(_)) = (rig.skeleton.find(&t.joint), &t.r) {
+                compensating[usize::from(j)] = compensate;
+            }
+        }
+        let levers = rig.levers(&compensating);
         for (track, t) in work.tracks.iter().enumerate() {
             let j = rig.skeleton.find(&t.joint).map_or(0, usize::from);
             let reach = rig.reach.get(j).copied().unwrap_or(1.0);
             let lever = if compensate {
-                rig.lever.get(j).copied().unwrap_or(1.0)
+                levers.get(j).copied().unwrap_or(1.0)
             } else {
                 reach
             };
@@ -217,6 +229,26 @@ impl Layout {
                 sub[s * nc + c] = sub_range(ranges[c], &comp.vals[keys.clone()]);
             }
         }
+        let rotations = index.len();
+        let compact = comps
+            .iter()
+            .zip(&ranges)
+            .all(|(c, r)| c.kind != Kind::R || compact_range_units(*r).is_some());
+        let per_key_index = (0..seg_count)
+            .map(|s| {
+                let keys = s * seg_len..((s + 1) * seg_len).min(n);
+                if !compact {
+                    return rotations;
+                }
+                index
+                    .iter()
+                    .filter(|list| {
+                        let i0 = list[keys.start];
+                        list[keys.clone()].iter().any(|&i| i != i0)
+                    })
+                    .count()
+            })
+            .collect();
         Layout {
             keys: n,
             seg_len,
@@ -226,6 +258,8 @@ impl Layout {
             index,
             ranges,
             sub,
+            per_key_index,
+            fixed_size: std::sync::OnceLock::new(),
         }
     }
 
@@ -271,6 +305,27 @@ impl Layout {
             bits[i] = b;
         }
         bits
+    }
+
+    /// The size of the clip record [`Layout::encode`] gives with these bit widths (whatever the
+    /// stored integers): the record's fixed part, then each segment's keys of `R_s` bits.
+    pub(super) fn record_size(&self, bits: &[u8], work: &Work, like: &Clip) -> Option<usize> {
+        let fixed = *self.fixed_size.get_or_init(|| {
+            let zero = vec![0u8; bits.len()];
+            let qi = vec![vec![0u32; self.keys]; self.comps.len()];
+            self.encode(&zero, &qi, work, like)
+                .map(|c| clip_record_size(&c))
+        });
+        let nc = self.comps.len();
+        let data: usize = (0..self.seg_count)
+            .map(|s| {
+                let seg = &bits[s * nc..(s + 1) * nc];
+                let record: usize =
+                    seg.iter().map(|&b| usize::from(b)).sum::<usize>() + 2 * self.per_key_index[s];
+                (record * self.seg_keys(s).len()).div_ceil(8)
+            })
+            .sum();
+        fixed.map(|f| f + data)
     }
 
     /// The compressed clip with these bit widths and stored integers (per component, per key).

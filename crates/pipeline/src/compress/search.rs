@@ -4,7 +4,7 @@ use super::eval::{Ctx, Eval};
 use super::metric::{clip_extent, measure, skeleton_extent, within, Rig};
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
     MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::Layout;
@@ -199,11 +199,12 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
 
 /// Steps 1 to 5 of the module docs; `None` when nothing met the limits.
 ///
-/// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) and every segment length
-/// of [`segment_candidates`] is quantized with its first bit widths; the [`DESCENDED`] smallest of
-/// those (one for clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result
-/// is kept (the first of equals). `compensate`: quantize rotations with chain compensation (only
-/// when every scale of the source poses is positive and uniform).
+/// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) is a work; each work
+/// has a layout per segment length of [`segment_candidates`]. [`estimated_candidates`] measures
+/// one layout per work and estimates the others; the [`DESCENDED`] smallest (one for `Fast` and for
+/// clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result is kept (the first
+/// of equals). `Max` adds [`exhaustive_candidates`]. `compensate`: quantize rotations with chain
+/// compensation (only when every scale of the source poses is positive and uniform).
 pub(super) fn compress_work(
     work: &mut Work,
     source: &Clip,
@@ -233,17 +234,15 @@ pub(super) fn compress_work(
     let effort = options.effort;
     let par = times.len() * rig.skeleton.len() >= PARALLEL_VOLUME;
     let budgets: Vec<f32> = match effort {
-        Effort::Fast => vec![FAST_KEY_BUDGET],
-        Effort::Default => KEY_BUDGETS.to_vec(),
         Effort::Max => KEY_BUDGETS
             .iter()
             .chain(&MAX_EXTRA_KEY_BUDGETS)
             .copied()
             .collect(),
+        _ => KEY_BUDGETS.to_vec(),
     };
     // The works and layouts of the default search come first, in the default's order, so that
-    // `Max` reaches the same first states for them (the ladder of each layout starts where the
-    // previous one ended) and can only add candidates.
+    // `Max` reaches the same candidates for them and can only add to them.
     let mut kept_sets: Vec<Vec<usize>> = Vec::new();
     let mut works: Vec<Work> = Vec::new();
     let mut default_works = 0;
@@ -267,7 +266,7 @@ pub(super) fn compress_work(
         works.push(base);
         default_works = 1;
     }
-    // (work, layout, part of the default search)
+    // (work, segment length, part of the default search)
     let mut plan: Vec<(usize, usize, bool)> = Vec::new();
     for (wi, w) in works.iter().enumerate() {
         for l in segment_candidates(w.times.len()) {
@@ -290,50 +289,28 @@ pub(super) fn compress_work(
     let layouts: Vec<(usize, Layout, bool)> = map_in_order(plan, par, |(wi, l, core)| {
         (wi, Layout::new(&works[wi], rig, l, compensate), core)
     });
-    // (size with the first bit widths, layout, bit widths)
-    let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
-    let mut start = tolerance;
-    let mut probe = None;
-    for (li, (wi, layout, _)) in layouts.iter().enumerate() {
-        let w = &works[*wi];
-        let Some((budget, bits, qi)) =
-            first_state(&ctx, layout, w, start, compensate, par, &mut probe)
-        else {
-            continue;
-        };
-        start = budget;
-        let Some(c) = layout.encode(&bits, &qi, w, source) else {
-            continue;
-        };
-        firsts.push((clip_record_size(&c), li, bits));
-    }
-    firsts.sort_by_key(|f| (f.0, f.1));
     let volume = times.len() * rig.skeleton.len();
     let descended = match effort {
         Effort::Fast => 1,
         _ if volume > LARGE_CLIP => 1,
         _ => DESCENDED,
     };
-    // Which candidates are refined: the `descended` smallest of the default search's layouts,
-    // and for `Max` also the MAX_DESCENDED smallest of all.
-    let mut defaults_taken = 0;
-    let chosen: Vec<(usize, usize, Vec<u8>)> = firsts
-        .into_iter()
-        .enumerate()
-        .filter(|(rank, f)| {
-            let core = layouts[f.1].2;
-            let take = core && defaults_taken < descended;
-            defaults_taken += usize::from(core);
-            take || (effort == Effort::Max && *rank < MAX_DESCENDED)
-        })
-        .map(|(_, f)| f)
-        .collect();
+    let mut chosen = estimated_candidates(
+        &ctx, &layouts, &works, source, tolerance, compensate, par, descended,
+    );
+    if effort == Effort::Max {
+        for c in exhaustive_candidates(&ctx, &layouts, &works, source, tolerance, compensate, par) {
+            if !chosen.iter().any(|x| x.0 == c.0 && x.1 == c.1) {
+                chosen.push(c);
+            }
+        }
+    }
     // The refinements are independent: run in parallel, the smallest kept (the first of equals
     // in candidate order, so the result does not depend on the thread count).
     // A long clip's one refinement spreads its own tries over the threads (its wavefronts are
     // wide: many segments); shorter clips refine several candidates side by side instead.
     let alone = par && chosen.len() == 1 && volume > LARGE_CLIP;
-    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(_, li, bits)| {
+    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(li, bits)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
         let mut e = Eval::new(&ctx, layout, w, bits, compensate);
@@ -352,6 +329,114 @@ pub(super) fn compress_work(
         }
     }
     best.map(|b| b.1)
+}
+
+/// The default search's candidates: per work, the first bit widths of its first layout are
+/// measured ([`first_state`]), and the budget they reached gives every other layout of the work its
+/// a-priori widths and so its size, without measuring them (the budget depends on the kept keys
+/// far more than on the segment length). The `count` smallest layouts (by that size; the first of
+/// equals) are then measured from that budget. Returns (layout, first bit widths).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn estimated_candidates(
+    ctx: &Ctx,
+    layouts: &[(usize, Layout, bool)],
+    works: &[Work],
+    source: &Clip,
+    tolerance: f32,
+    compensate: bool,
+    par: bool,
+    count: usize,
+) -> Vec<(usize, Vec<u8>)> {
+    // (estimated size, layout, budget, measured first widths if any)
+    let mut sized: Vec<(usize, usize, f32, Option<Vec<u8>>)> = Vec::new();
+    let mut start = tolerance;
+    let mut probe = None;
+    let mut budget_of: Vec<Option<f32>> = vec![None; works.len()];
+    for (li, (wi, layout, core)) in layouts.iter().enumerate() {
+        if !core {
+            continue;
+        }
+        let w = &works[*wi];
+        let (budget, bits) = match budget_of[*wi] {
+            Some(b) => (b, layout.first_bits(b)),
+            None => {
+                let Some((b, bits, _)) =
+                    first_state(ctx, layout, w, start, compensate, par, &mut probe)
+                else {
+                    continue;
+                };
+                start = b;
+                budget_of[*wi] = Some(b);
+                (b, bits)
+            }
+        };
+        let measured =
+            budget_of[*wi] == Some(budget) && sized.iter().all(|x| layouts[x.1].0 != *wi);
+        let Some(size) = layout.record_size(&bits, w, source) else {
+            continue;
+        };
+        sized.push((size, li, budget, measured.then_some(bits)));
+    }
+    sized.sort_by_key(|f| (f.0, f.1));
+    sized.truncate(count);
+    // The chosen layouts' own first widths, measured from their work's budget.
+    map_in_order(sized, par && count > 1, |(_, li, budget, measured)| {
+        let (wi, layout, _) = &layouts[li];
+        match measured {
+            Some(bits) => Some((li, bits)),
+            None => {
+                let mut probe = None;
+                first_state(
+                    ctx,
+                    layout,
+                    &works[*wi],
+                    budget,
+                    compensate,
+                    false,
+                    &mut probe,
+                )
+                .map(|(_, bits, _)| (li, bits))
+            }
+        }
+    })
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// `Max`'s extra candidates: every layout measured with its first widths, the [`MAX_DESCENDED`]
+/// smallest. Returns (layout, first bit widths).
+pub(super) fn exhaustive_candidates(
+    ctx: &Ctx,
+    layouts: &[(usize, Layout, bool)],
+    works: &[Work],
+    source: &Clip,
+    tolerance: f32,
+    compensate: bool,
+    par: bool,
+) -> Vec<(usize, Vec<u8>)> {
+    let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
+    let mut start = tolerance;
+    let mut probe = None;
+    for (li, (wi, layout, _)) in layouts.iter().enumerate() {
+        let w = &works[*wi];
+        let Some((budget, bits, _)) =
+            first_state(ctx, layout, w, start, compensate, par, &mut probe)
+        else {
+            continue;
+        };
+        start = budget;
+        let Some(size) = layout.record_size(&bits, w, source) else {
+            continue;
+        };
+        firsts.push((size, li, bits));
+    }
+    firsts.sort_by_key(|f| (f.0, f.1));
+    firsts
+        .into_iter()
+        .take(MAX_DESCENDED)
+        .map(|f| (f.1, f.2))
+        .collect()
 }
 
 pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {

@@ -517,3 +517,71 @@ fn a_probe_changes_no_first_width_verdict() {
     // Both verdicts occur, so the comparison can tell.
     assert!(passed > 0 && failed > 0, "{passed} passed, {failed} failed");
 }
+
+#[test]
+fn record_size_is_the_size_of_the_encoded_record() {
+    // The search ranks candidates by `Layout::record_size` without encoding them: it must be the
+    // size `clip_record_size` gives the encoded clip, for any bit widths (shared and per-key
+    // rotation indices, one or many segments, compact or not).
+    let (source, rig) = moving_chain(7, 90);
+    let work = Work::from_plain(&source);
+    let mut seed = 7u32;
+    let mut next = || {
+        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        seed >> 8
+    };
+    let mut checked = 0;
+    for compensate in [true, false] {
+        for seg in [1, 5, 16, 32, 90] {
+            let layout = Layout::new(&work, &rig, seg, compensate);
+            for _ in 0..4 {
+                let bits: Vec<u8> = (0..layout.sub.len()).map(|_| (next() % 17) as u8).collect();
+                let qi: Vec<Vec<u32>> = (0..layout.comps.len())
+                    .map(|c| {
+                        (0..layout.keys)
+                            .map(|k| {
+                                let b = bits[(k / layout.seg_len) * layout.comps.len() + c];
+                                next() & ((1u32 << b) - 1)
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let clip = layout.encode(&bits, &qi, &work, &source).unwrap();
+                assert_eq!(
+                    layout.record_size(&bits, &work, &source),
+                    Some(clip_record_size(&clip)),
+                    "segments of {seg}, compensate {compensate}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 40);
+}
+
+#[test]
+fn a_rotation_lever_reaches_through_joints_that_do_not_compensate() {
+    // j0 -> j1 (no quantized rotation: a helper like CMU's LHipJoint) -> j2 -> j3, bones of 0.3,
+    // error points 0.1 from their joints. j0's orientation error is passed on by j1 to j2's
+    // position (0.6 from j0) and so to its error points (0.7); j2 compensates, so nothing below it
+    // is reached. With every joint compensating, the lever is one bone and the child's points.
+    let skeleton = chain(4, 0.3);
+    let clip = swing(&skeleton, 10);
+    let rig = Rig::new(&clip.to_plain(), Some(&skeleton), 0.1).unwrap();
+    let all = rig.levers(&[true, true, true, true]);
+    let helper = rig.levers(&[true, false, true, true]);
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+    assert!(
+        close(all[0], 0.4) && close(all[1], 0.4) && close(all[2], 0.4),
+        "{all:?}"
+    );
+    assert!(
+        close(all[3], 0.1),
+        "a leaf's lever is its error points' distance: {all:?}"
+    );
+    assert!(
+        close(helper[0], 0.7),
+        "through the helper to j2: {helper:?}"
+    );
+    assert!(close(helper[1], 0.4) && close(helper[2], 0.4), "{helper:?}");
+}

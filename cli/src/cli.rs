@@ -179,7 +179,7 @@ pub struct CompressArgs {
 /// `--effort`: the clip encoder's search effort.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Default)]
 pub enum EffortArg {
-    /// One key-reduction budget, the smallest candidate refined: a few times faster.
+    /// The default's candidates, only the smallest refined.
     Fast,
     /// The default search.
     #[default]
@@ -208,6 +208,9 @@ pub struct ConvertArgs {
     /// Worker threads for batch mode (default: all cores).
     #[arg(long, short = 'j', value_name = "N")]
     pub jobs: Option<usize>,
+    /// Add each step's wall time (import, each LOD, each clip's encode, write) to the report.
+    #[arg(long)]
+    pub timings: bool,
     /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
     #[arg(long, value_name = "FILE")]
     pub anim: Vec<PathBuf>,

@@ -8,15 +8,17 @@ use crate::batch::{self, Job};
 use crate::cli::ConvertArgs;
 use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::report::{
-    clip_report, diag_report, mesh_report, num, ClipOut, ConvertReport, FileReport, MeshOut,
-    OutputDetails,
+    clip_report, diag_report, mesh_report, num, ClipOut, ClipTiming, ConvertReport, FileReport,
+    MeshOut, MeshTimings, OutputDetails, Timings,
 };
 use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
 use sinew_core::Skeleton;
-use sinew_pipeline::compile::{compile_compressed, compress_clips, CompileReport, CompressedClips};
+use sinew_pipeline::compile::{
+    compile_compressed, compress_clips_timed, CompileReport, CompressedClips,
+};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
@@ -73,6 +75,7 @@ pub fn details(
         splits,
         diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
         textures: Vec::new(),
+        timings: None,
     }
 }
 
@@ -94,19 +97,19 @@ pub fn write_scene(
     compress: Option<&CompressOptions>,
 ) -> anyhow::Result<Written> {
     let compressed = compress_scene_clips(&scene.clips, scene.skeleton.as_ref(), input, compress)?;
-    write_compressed(scene, input, output, compressed)
+    write_compressed(scene, input, output, compressed.map(|c| c.0))
 }
 
 /// The clip half of [`write_scene`]: a scene's clips compiled and compressed (`None` without
-/// compression); `skeleton` is the scene's.
+/// compression), with each clip's encoding time in seconds; `skeleton` is the scene's.
 fn compress_scene_clips(
     clips: &[SceneClip],
     skeleton: Option<&Skeleton>,
     input: &str,
     compress: Option<&CompressOptions>,
-) -> anyhow::Result<Option<CompressedClips>> {
+) -> anyhow::Result<Option<(CompressedClips, Vec<f64>)>> {
     compress
-        .map(|o| compress_clips(clips, skeleton, o))
+        .map(|o| compress_clips_timed(clips, skeleton, o))
         .transpose()
         .map_err(|e| anyhow!("{input}: compiling: {e}"))
 }
@@ -139,15 +142,24 @@ struct Plan {
     lod: Option<LodOptions>,
     compress: Option<CompressOptions>,
     textures: bool,
+    timings: bool,
+}
+
+/// Milliseconds since `start`.
+fn ms_since(start: std::time::Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1000.0
 }
 
 fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
     let (input, output) = (&job.input, &job.output);
     let label = input.display().to_string();
+    let started = std::time::Instant::now();
     let mut scene = match job.format {
         Some(format) => crate::input::import_as(input, format, &plan.import)?,
         None => crate::input::import(input, &plan.import)?,
     };
+    let import_ms = ms_since(started);
+    let prepared = std::time::Instant::now();
     let cuts = match &plan.clips {
         Some(spec) => steps::cut(&mut scene, spec, &label)?,
         None => Vec::new(),
@@ -164,6 +176,7 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
         )?);
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
+    let prepare_ms = ms_since(prepared);
     // LODs (meshes) and clip compression (clips) read and write different parts of the scene and
     // are the two costly steps: they run at the same time. Each gives what it gives alone; a LOD
     // error is reported first, as when they ran in turn.
@@ -185,8 +198,12 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
             )
         },
     );
-    lods?;
-    let compressed = compressed?;
+    let lod_times = lods?;
+    let (compressed, encode_seconds) = match compressed? {
+        Some((c, s)) => (Some(c), s),
+        None => (None, Vec::new()),
+    };
+    let texturing = std::time::Instant::now();
     if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)
             .map_err(|e| anyhow!("{}: cannot create the folder: {e}", dir.display()))?;
@@ -206,9 +223,40 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
             textures.push(path.display().to_string());
         }
     }
+    let textures_ms = ms_since(texturing);
+    let writing = std::time::Instant::now();
     let written = write_compressed(&scene, &label, output, compressed)?;
+    let write_ms = ms_since(writing);
     let mut d = details(&scene, written, motions, cuts, splits);
     d.textures = textures;
+    if plan.timings {
+        d.timings = Some(Timings {
+            import_ms,
+            prepare_ms,
+            lods: scene
+                .meshes
+                .iter()
+                .zip(lod_times)
+                .map(|(m, t)| MeshTimings {
+                    mesh: m.name.clone(),
+                    optimize_ms: t.optimize * 1000.0,
+                    levels_ms: t.levels.iter().map(|s| s * 1000.0).collect(),
+                })
+                .collect(),
+            clips: scene
+                .clips
+                .iter()
+                .zip(encode_seconds)
+                .map(|(c, s)| ClipTiming {
+                    clip: c.name.clone(),
+                    encode_ms: s * 1000.0,
+                })
+                .collect(),
+            textures_ms,
+            write_ms,
+            total_ms: ms_since(started),
+        });
+    }
     Ok(d)
 }
 
@@ -287,6 +335,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         lod,
         compress,
         textures: !args.no_textures,
+        timings: args.timings,
     };
 
     // One input with -o: an error is the command's error (exit 2, one line).
@@ -559,6 +608,43 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         if diag.level == "warning" {
             let _ = writeln!(o, "  warning [{}] {}", diag.code, diag.message);
         }
+    }
+    if let Some(t) = &d.timings {
+        o.push_str(&human_timings(t));
+    }
+    o
+}
+
+/// The `--timings` lines of the human summary.
+fn human_timings(t: &Timings) -> String {
+    let ms = |x: f64| format!("{x:.1} ms");
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "  timings: total {}, import {}, prepare {}, textures {}, write {}",
+        ms(t.total_ms),
+        ms(t.import_ms),
+        ms(t.prepare_ms),
+        ms(t.textures_ms),
+        ms(t.write_ms)
+    );
+    for m in &t.lods {
+        let levels: Vec<String> = m
+            .levels_ms
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| format!("LOD {} {}", k + 1, ms(x)))
+            .collect();
+        let _ = writeln!(
+            o,
+            "    mesh \"{}\": optimize {}, {}",
+            m.mesh,
+            ms(m.optimize_ms),
+            levels.join(", ")
+        );
+    }
+    for c in &t.clips {
+        let _ = writeln!(o, "    clip \"{}\": encode {}", c.clip, ms(c.encode_ms));
     }
     o
 }

@@ -7,8 +7,12 @@ use sinew_core::{Channel, Clip, ClipBinding, Sampler, Skeleton, Transform};
 /// The joints the error is measured on: the skeleton's, then one root per track it lacks.
 pub(super) struct Rig {
     pub(super) skeleton: Skeleton,
-    /// Per joint: the local offsets of its three error points.
+    /// Per joint: the local offsets of its three error points (its local axes times
+    /// `point_scale`).
     pub(super) points: Vec<[Vec3; 3]>,
+    /// Per joint: how far along its local axes its error points are (the distance over the
+    /// joint's bind-pose model scale).
+    pub(super) point_scale: Vec<f32>,
     /// Per joint: how far its error points and descendants reach from it in the bind pose.
     pub(super) reach: Vec<f32>,
     /// Per joint: its distance from its parent in the bind pose (0 for roots).
@@ -115,9 +119,10 @@ impl Rig {
         fk(&parents, &bind, &mut m);
         let n = parents.len();
         let scale: Vec<f32> = m.iter().map(|a| model_scale(a).max(1e-12)).collect();
-        let points = scale
+        let point_scale: Vec<f32> = scale.iter().map(|s| distance / s).collect();
+        let points = point_scale
             .iter()
-            .map(|s| [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * (distance / s)))
+            .map(|&c| [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * c))
             .collect();
         let mut reach = vec![distance; n];
         let mut bone = vec![0.0; n];
@@ -137,6 +142,7 @@ impl Rig {
         Some(Rig {
             skeleton,
             points,
+            point_scale,
             reach,
             bone,
             distance,

@@ -7,7 +7,7 @@ use super::options::{
     DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
     MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
-use super::quantize::Layout;
+use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
 use super::trial::Trial;
 use rayon::prelude::*;
@@ -286,8 +286,12 @@ pub(super) fn compress_work(
         // Default layouts first (stable: their relative order is kept).
         plan.sort_by_key(|l| !l.2);
     }
+    // The components of a set of kept keys are shared by its segment lengths' layouts.
+    let bases: Vec<Components> = map_in_order((0..works.len()).collect(), par, |wi| {
+        Components::new(&works[wi], rig, compensate)
+    });
     let layouts: Vec<(usize, Layout, bool)> = map_in_order(plan, par, |(wi, l, core)| {
-        (wi, Layout::new(&works[wi], rig, l, compensate), core)
+        (wi, Layout::with_segments(&bases[wi], l), core)
     });
     let volume = times.len() * rig.skeleton.len();
     let descended = match effort {

@@ -45,14 +45,28 @@ pub(super) fn first_state(
     par: bool,
     probe: &mut Option<usize>,
 ) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
-    type Passed = Result<(Vec<u8>, Vec<Vec<u32>>), usize>;
-    let passes = |budget: f32, probe: Option<usize>| -> Passed {
+    first_eval(ctx, layout, work, start, compensate, par, probe).map(|(b, e)| (b, e.bits, e.qi))
+}
+
+/// [`first_state`], returning the state itself: a check that passes has quantized every key and
+/// computed every time, so it is the state [`Eval::new`] would build with those widths.
+pub(super) fn first_eval<'a>(
+    ctx: &'a Ctx<'a>,
+    layout: &'a Layout,
+    work: &Work,
+    start: f32,
+    compensate: bool,
+    par: bool,
+    probe: &mut Option<usize>,
+) -> Option<(f32, Eval<'a>)> {
+    type Passed<'b> = Result<Eval<'b>, usize>;
+    let passes = |budget: f32, probe: Option<usize>| -> Passed<'a> {
         let bits = layout.first_bits(budget);
         let (e, verdict) = Eval::build(ctx, layout, work, bits, compensate, true, probe);
-        verdict.map(|()| (e.bits, e.qi))
+        verdict.map(|()| e)
     };
     // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
-    let noted = |r: Passed, probe: &mut Option<usize>| {
+    let noted = |r: Passed<'a>, probe: &mut Option<usize>| {
         if let Err(i) = r {
             *probe = Some(i);
         }
@@ -101,7 +115,13 @@ pub(super) fn first_state(
             }
         }
     }
-    found.map(|(bits, qi)| (budget, bits, qi))
+    found.map(|e| (budget, e))
+}
+
+/// Where a refinement starts: a state already measured, or first bit widths to build one from.
+pub(super) enum Start<'a> {
+    State(Box<Eval<'a>>),
+    Bits(Vec<u8>),
 }
 
 /// Step 3, second part: rounds of one-bit reductions over every component of every segment. A
@@ -299,13 +319,22 @@ pub(super) fn compress_work(
         _ if volume > LARGE_CLIP => 1,
         _ => DESCENDED,
     };
-    let mut chosen = estimated_candidates(
+    let mut chosen: Vec<(usize, Start)> = estimated_candidates(
         &ctx, &layouts, &works, source, tolerance, compensate, par, descended,
-    );
+    )
+    .into_iter()
+    .map(|(li, e)| (li, Start::State(Box::new(e))))
+    .collect();
     if effort == Effort::Max {
-        for c in exhaustive_candidates(&ctx, &layouts, &works, source, tolerance, compensate, par) {
-            if !chosen.iter().any(|x| x.0 == c.0 && x.1 == c.1) {
-                chosen.push(c);
+        for (li, bits) in
+            exhaustive_candidates(&ctx, &layouts, &works, source, tolerance, compensate, par)
+        {
+            let known = chosen.iter().any(|(l, start)| match start {
+                Start::State(e) => *l == li && e.bits == bits,
+                Start::Bits(b) => *l == li && *b == bits,
+            });
+            if !known {
+                chosen.push((li, Start::Bits(bits)));
             }
         }
     }
@@ -314,10 +343,13 @@ pub(super) fn compress_work(
     // A long clip's one refinement spreads its own tries over the threads (its wavefronts are
     // wide: many segments); shorter clips refine several candidates side by side instead.
     let alone = par && chosen.len() == 1 && volume > LARGE_CLIP;
-    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(li, bits)| {
+    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(li, start)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
-        let mut e = Eval::new(&ctx, layout, w, bits, compensate);
+        let mut e = match start {
+            Start::State(e) => *e,
+            Start::Bits(bits) => Eval::new(&ctx, layout, w, bits, compensate),
+        };
         let before = e.encode(w);
         descend(&mut e, alone);
         [e.encode(w), before]
@@ -341,18 +373,18 @@ pub(super) fn compress_work(
 /// far more than on the segment length). The `count` smallest layouts (by that size; the first of
 /// equals) are then measured from that budget. Returns (layout, first bit widths).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn estimated_candidates(
-    ctx: &Ctx,
-    layouts: &[(usize, Layout, bool)],
+pub(super) fn estimated_candidates<'a>(
+    ctx: &'a Ctx<'a>,
+    layouts: &'a [(usize, Layout, bool)],
     works: &[Work],
     source: &Clip,
     tolerance: f32,
     compensate: bool,
     par: bool,
     count: usize,
-) -> Vec<(usize, Vec<u8>)> {
-    // (estimated size, layout, budget, measured first widths if any)
-    let mut sized: Vec<(usize, usize, f32, Option<Vec<u8>>)> = Vec::new();
+) -> Vec<(usize, Eval<'a>)> {
+    // (estimated size, layout, budget, the measured state if any)
+    let mut sized: Vec<(usize, usize, f32, Option<Eval<'a>>)> = Vec::new();
     let mut start = tolerance;
     let mut probe = None;
     let mut budget_of: Vec<Option<f32>> = vec![None; works.len()];
@@ -361,25 +393,22 @@ pub(super) fn estimated_candidates(
             continue;
         }
         let w = &works[*wi];
-        let (budget, bits) = match budget_of[*wi] {
-            Some(b) => (b, layout.first_bits(b)),
+        let (budget, bits, measured) = match budget_of[*wi] {
+            Some(b) => (b, layout.first_bits(b), None),
             None => {
-                let Some((b, bits, _)) =
-                    first_state(ctx, layout, w, start, compensate, par, &mut probe)
+                let Some((b, e)) = first_eval(ctx, layout, w, start, compensate, par, &mut probe)
                 else {
                     continue;
                 };
                 start = b;
                 budget_of[*wi] = Some(b);
-                (b, bits)
+                (b, e.bits.clone(), Some(e))
             }
         };
-        let measured =
-            budget_of[*wi] == Some(budget) && sized.iter().all(|x| layouts[x.1].0 != *wi);
         let Some(size) = layout.record_size(&bits, w, source) else {
             continue;
         };
-        sized.push((size, li, budget, measured.then_some(bits)));
+        sized.push((size, li, budget, measured));
     }
     sized.sort_by_key(|f| (f.0, f.1));
     sized.truncate(count);
@@ -387,10 +416,10 @@ pub(super) fn estimated_candidates(
     map_in_order(sized, par && count > 1, |(_, li, budget, measured)| {
         let (wi, layout, _) = &layouts[li];
         match measured {
-            Some(bits) => Some((li, bits)),
+            Some(e) => Some((li, e)),
             None => {
                 let mut probe = None;
-                first_state(
+                first_eval(
                     ctx,
                     layout,
                     &works[*wi],
@@ -399,7 +428,7 @@ pub(super) fn estimated_candidates(
                     false,
                     &mut probe,
                 )
-                .map(|(_, bits, _)| (li, bits))
+                .map(|(_, e)| (li, e))
             }
         }
     })

@@ -312,7 +312,8 @@ fn run_job(i: usize, job: &Job, plan: &Plan) -> (Outcome, Vec<Stamp>) {
         }
     }
     let started = std::time::Instant::now();
-    let (scene, reads) = crate::input::import_tracked(&job.input, job.format, &plan.import);
+    let (scene, reads) =
+        crate::input::import_tracked(&job.input, job.format, &plan.import, plan.record.is_some());
     let import_ms = ms_since(started);
     let mut built = match scene.and_then(|scene| convert_one(job, plan, scene)) {
         Ok(b) => b,
@@ -480,7 +481,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let mut extra = Vec::new();
     let mut anims = Vec::with_capacity(args.anim.len());
     for a in &args.anim {
-        let (scene, reads) = crate::input::import_tracked(a, None, &args.import);
+        let (scene, reads) = crate::input::import_tracked(a, None, &args.import, args.incremental);
         anims.push((a.display().to_string(), scene?));
         extra.extend(reads);
     }

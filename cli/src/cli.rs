@@ -222,6 +222,10 @@ pub struct ConvertArgs {
     /// were written (a record in OUT-DIR/.sinew-incremental/); redo the rest.
     #[arg(long)]
     pub incremental: bool,
+    /// Also write a static HTML page (one file, no server or network needed) with a row per input:
+    /// a picture of its output, joints, meshes, triangles, LODs, clips, textures, warnings, errors.
+    #[arg(long, value_name = "OUT.html")]
+    pub report: Option<PathBuf>,
     /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
     #[arg(long, value_name = "FILE")]
     pub anim: Vec<PathBuf>,

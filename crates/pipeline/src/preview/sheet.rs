@@ -403,6 +403,42 @@ pub fn contact_sheet(
     ))
 }
 
+/// A thumbnail: the model's rest pose from the front (its bind facing), textured, without skeleton
+/// lines unless it has no meshes, `size` pixels square (16 to 1024), for batch reports. `opts` gives
+/// the facing, the meshes (default body) and the images; its clip, frames, names and title are not
+/// used.
+pub fn thumbnail(asset: &Asset, opts: &SheetOptions, size: u32) -> Result<Vec<u8>, SheetError> {
+    let size = size.clamp(16, 1024);
+    let chosen = match &opts.meshes {
+        Some(m) => m.clone(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    let asset = &body::only(asset, &chosen);
+    let textures = Textures::new(asset, &opts.images);
+    let mut canvas =
+        Canvas::new(size, size, CELL_BACKGROUND).ok_or(SheetError::TooLarge(size, size))?;
+    let cell = Cell {
+        x: 0,
+        y: 0,
+        w: size,
+        h: size,
+    };
+    let rest = pose(asset, &bind_pose(asset));
+    let fit = Fit::new(
+        View::front(opts.rest_facing),
+        rest.points(0),
+        cell,
+        (size as f32 * 0.05).max(2.0),
+    );
+    draw_meshes(&mut canvas, asset, &rest, 0, &fit, cell, &textures);
+    if asset.meshes.is_empty() {
+        if let Some(s) = asset.skeleton.as_ref().filter(|s| !s.is_empty()) {
+            draw_skeleton(&mut canvas, s, &rest, &fit, false);
+        }
+    }
+    canvas.png().map_err(SheetError::Png)
+}
+
 /// A number in at most four significant figures (`0.0123`, `1.5`, `120`).
 fn short(v: f32) -> String {
     let s = format!("{v:.4}");
@@ -434,6 +470,14 @@ mod tests {
         let looping = plain.with_looping(true);
         assert_eq!(strip_times(&looping, 4), vec![0.0, 0.5, 1.0, 1.5]);
         assert_eq!(strip_times(&plain, 1), vec![0.0]);
+    }
+
+    #[test]
+    fn a_thumbnail_is_square_and_an_empty_asset_draws_a_plain_one() {
+        let png = thumbnail(&Asset::default(), &SheetOptions::default(), 64).expect("png");
+        let dec = png::Decoder::new(std::io::Cursor::new(png));
+        let r = dec.read_info().expect("header");
+        assert_eq!((r.info().width, r.info().height), (64, 64));
     }
 
     #[test]

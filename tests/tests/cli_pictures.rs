@@ -493,3 +493,54 @@ fn front_is_front_by_the_files_own_axes() {
     assert_eq!(r["axes"]["from"], "--up");
     assert_eq!(r["axes"]["bind_forward"], "+x");
 }
+
+#[test]
+fn gltf_images_stored_inside_the_file_are_drawn_and_exported() {
+    // CesiumMan stores a JPEG in a buffer view, Fox a PNG: both are found, decoded and drawn, and the
+    // export embeds them instead of noting them as missing.
+    let dir = tempfile::tempdir().unwrap();
+    for (file, mime) in [
+        ("gltf/CesiumMan.glb", "image/jpeg"),
+        ("gltf/Fox.glb", "image/png"),
+    ] {
+        let Some(path) = sinew_testdata::corpus_file(file) else {
+            return;
+        };
+        let png = dir.path().join("p.png");
+        let r = run_ok(&[
+            "preview".as_ref(),
+            path.as_os_str(),
+            "--frames".as_ref(),
+            "1".as_ref(),
+            "-o".as_ref(),
+            png.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        assert_eq!(r["textured_materials"], 1, "{file}");
+        let gltf = dir.path().join("e.gltf");
+        let r = run_ok(&[
+            "export".as_ref(),
+            path.as_os_str(),
+            "-o".as_ref(),
+            gltf.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        assert_eq!(r["images"], 1, "{file}: {r}");
+        let doc: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+        assert_eq!(doc["images"][0]["mimeType"], mime, "{file}");
+        // The embedded bytes are the source's image, decodable.
+        let bytes = std::fs::read(&path).unwrap();
+        let found = sinew_import::gltf::embedded_images(file, &bytes, &|_: &str| {
+            Err(std::io::Error::other("no files"))
+        })
+        .unwrap();
+        assert_eq!(found.len(), 1);
+        let img = sinew_pipeline::texture::decode_image("x", &found[0].1).unwrap();
+        assert!(img.width >= 64 && img.height >= 64, "{file}");
+        // Damaged image bytes decode to nothing, without a panic.
+        for cut in [10, found[0].1.len() / 3] {
+            let _ = sinew_pipeline::texture::decode_image("x", &found[0].1[..cut]);
+        }
+    }
+}

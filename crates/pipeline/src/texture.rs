@@ -90,6 +90,46 @@ pub fn decode_png(name: &str, bytes: &[u8]) -> Option<Image> {
     })
 }
 
+/// Decodes a baseline or progressive JPEG file to 8-bit RGBA (zune-jpeg), named `name`. `None` when
+/// it is not a JPEG, is damaged, or has a side above [`MAX_DECODED_SIDE`]; a panic inside the decoder
+/// on a hostile file is caught and is `None` too.
+pub fn decode_jpeg(name: &str, bytes: &[u8]) -> Option<Image> {
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    if !bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        return None;
+    }
+    let side = MAX_DECODED_SIDE as usize;
+    let opts = DecoderOptions::default()
+        .set_max_width(side)
+        .set_max_height(side)
+        .jpeg_set_out_colorspace(ColorSpace::RGBA);
+    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut dec = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), opts);
+        let pixels = dec.decode().ok()?;
+        let info = dec.info()?;
+        Some((info.width, info.height, dec.output_colorspace()?, pixels))
+    }))
+    .ok()??;
+    let (w, h, space, pixels) = decoded;
+    let n = usize::from(w) * usize::from(h);
+    if w == 0 || h == 0 || space != ColorSpace::RGBA || pixels.len() != n * 4 {
+        return None;
+    }
+    Some(Image {
+        name: name.to_string(),
+        width: u32::from(w),
+        height: u32::from(h),
+        rgba: pixels,
+    })
+}
+
+/// Decodes a PNG or JPEG file (by its first bytes) to RGBA; `None` for anything else.
+pub fn decode_image(name: &str, bytes: &[u8]) -> Option<Image> {
+    decode_png(name, bytes).or_else(|| decode_jpeg(name, bytes))
+}
+
 /// The PNG files for a scene's images, named for `output_stem`, and the scene's materials pointed at
 /// them: `(file name, bytes)` in image order.
 pub fn textures_for_output(

@@ -212,6 +212,9 @@ pub struct ConvertArgs {
     /// Worker threads for batch mode (default: all cores).
     #[arg(long, short = 'j', value_name = "N")]
     pub jobs: Option<usize>,
+    /// Add each step's wall time (import, each LOD, each clip's encode, write) to the report.
+    #[arg(long)]
+    pub timings: bool,
     /// Fail an input that raises any warning (nothing is written for it; a batch exits 1).
     #[arg(long)]
     pub strict: bool,

@@ -34,6 +34,15 @@ impl Stamp {
         }
     }
 
+    /// A stamp with the path and size only (no hash): for a record that needs no content check.
+    pub fn unhashed(path: &Path, data: Option<&[u8]>) -> Stamp {
+        Stamp {
+            path: path.display().to_string(),
+            bytes: data.map(|d| d.len() as u64),
+            blake3: None,
+        }
+    }
+
     /// The stamp of the file at `path` now.
     pub fn read(path: &Path) -> Stamp {
         Stamp::of(path, std::fs::read(path).ok().as_deref())

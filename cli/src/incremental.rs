@@ -141,6 +141,7 @@ pub fn options_fingerprint(args: &ConvertArgs, extra: &[Stamp]) -> String {
     a.jobs = None;
     a.strict = false;
     a.incremental = false;
+    a.timings = false;
     hex(format!("sinew {SINEW_VERSION}\n{a:?}\n{extra:?}").as_bytes())
 }
 

@@ -64,14 +64,17 @@ pub fn import_as(path: &Path, format: Format, args: &ImportArgs) -> anyhow::Resu
 /// returns with the result the stamp of every file read: the input first, then each file the
 /// importer asked for beside it (companions, SMDs, includes, buffers, images, material libraries),
 /// in the order asked, missing ones included. Both the incremental record and the folder walk's
-/// report use them.
+/// report use them. The contents are hashed only with `hash` (the incremental record needs it;
+/// the folder walk needs the paths alone, and hashing a large input costs more than a third of
+/// importing it).
 pub fn import_tracked(
     path: &Path,
     format: Option<Format>,
     args: &ImportArgs,
+    hash: bool,
 ) -> (anyhow::Result<Scene>, Vec<Stamp>) {
     let reads = RefCell::new(Vec::new());
-    let result = import_recording(path, format, args, &reads);
+    let result = import_recording(path, format, args, &reads, hash);
     (result, reads.into_inner())
 }
 
@@ -80,7 +83,15 @@ fn import_recording(
     format: Option<Format>,
     args: &ImportArgs,
     reads: &RefCell<Vec<Stamp>>,
+    hash: bool,
 ) -> anyhow::Result<Scene> {
+    let stamp = |p: &Path, data: Option<&[u8]>| {
+        if hash {
+            Stamp::of(p, data)
+        } else {
+            Stamp::unhashed(p, data)
+        }
+    };
     let format = match format {
         Some(f) => f,
         None => check_input(path)?,
@@ -88,9 +99,7 @@ fn import_recording(
     let name = path.display().to_string();
     let bytes =
         std::fs::read(path).map_err(|e| ImportError::in_section(&name, "file", e.to_string()))?;
-    reads
-        .borrow_mut()
-        .push(Stamp::of(&normal(path), Some(&bytes)));
+    reads.borrow_mut().push(stamp(&normal(path), Some(&bytes)));
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let inner = sinew_import::beside(path);
     let resolve = |rel: &str| -> std::io::Result<Vec<u8>> {
@@ -98,7 +107,7 @@ fn import_recording(
         let at = normal(&dir.join(rel.replace('\\', "/")));
         let mut list = reads.borrow_mut();
         if !list.iter().any(|s| Path::new(&s.path) == at) {
-            list.push(Stamp::of(&at, got.as_ref().ok().map(Vec::as_slice)));
+            list.push(stamp(&at, got.as_ref().ok().map(Vec::as_slice)));
         }
         got
     };

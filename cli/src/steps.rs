@@ -477,29 +477,35 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
     let Scene {
         meshes, skeleton, ..
     } = scene;
-    mesh_lods(meshes, skeleton.as_ref(), options, file)
+    mesh_lods(meshes, skeleton.as_ref(), options, file).map(|_| ())
 }
 
 /// [`lods`] on a scene's meshes alone (`skeleton` is the scene's), so that its clips can be worked
-/// on at the same time.
+/// on at the same time. Returns each mesh's wall times (empty for `None`).
 pub fn mesh_lods(
     meshes: &mut [sinew_scene::Mesh],
     skeleton: Option<&sinew_core::Skeleton>,
     options: Option<&LodOptions>,
     file: &str,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Vec<sinew_pipeline::lod::MeshLodTimes>> {
     match options {
         None => {
             for m in meshes {
                 m.lods.clear();
             }
+            Ok(Vec::new())
         }
         Some(o) => {
-            sinew_pipeline::lod::generate_mesh_lods(meshes, skeleton, o, &Default::default())
-                .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
+                meshes,
+                skeleton,
+                o,
+                &Default::default(),
+            )
+            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            Ok(times)
         }
     }
-    Ok(())
 }
 
 /// The compression options of `--no-compress`, `--tolerance`, `--error-distance`; `None` for plain

@@ -9,7 +9,10 @@ report), with the GIL released while sinew works:
 - ``write_pc2(path, positions, fps)``, ``write_mdd(path, positions, fps)``: the cache writers;
 - ``bake_to(src, out, format="pc2", **options)`` -> dict: ``sinew bake`` (EXR, PC2, MDD, sidecar, OBJ);
 - ``verify(cache, against)`` -> dict, the report of ``sinew verify --json`` (``identical`` says it all);
-- ``map(rig, motion, **options)`` -> dict, the report of ``sinew map --json``.
+- ``map(rig, motion, **options)`` -> dict, the report of ``sinew map --json``;
+- ``load(path)`` -> :class:`Asset`: the file as numpy arrays (skeleton, clips, meshes, masks, game
+  data), with ``asset.sample(clip, times)`` -> ``(T, J, 4, 4)`` joint matrices and
+  ``asset.skin(clip, times)`` -> ``(T, V, 3)`` positions from sinew's runtime (``sinew.asset``).
 
 Options are the command line's, spelled with underscores: ``convert(src, out, lod="none",
 no_compress=True, anim=["walk.bvh", "run.bvh"])`` is ``sinew convert src -o out --lod none
@@ -31,6 +34,7 @@ import numpy as np
 
 from . import _sinew
 from ._sinew import InputError, SinewError, UsageError
+from .asset import Asset, Clip, Lod, Mask, Material, Mesh, Skeleton, load
 
 __all__ = [
     "SinewError",
@@ -47,6 +51,14 @@ __all__ = [
     "export",
     "preview",
     "run",
+    "load",
+    "Asset",
+    "Skeleton",
+    "Clip",
+    "Mesh",
+    "Lod",
+    "Material",
+    "Mask",
     "__version__",
 ]
 

@@ -10,15 +10,17 @@ use crate::digest::Stamp;
 use crate::incremental;
 use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::report::{
-    clip_report, diag_report, mesh_report, num, strict_error, warning_pairs, ClipOut,
-    ConvertReport, FileReport, IncrementalReport, MeshOut, OutputDetails,
+    clip_report, diag_report, mesh_report, num, strict_error, warning_pairs, ClipOut, ClipTiming,
+    ConvertReport, FileReport, IncrementalReport, MeshOut, MeshTimings, OutputDetails, Timings,
 };
 use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
 use sinew_core::Skeleton;
-use sinew_pipeline::compile::{compile_compressed, compress_clips, CompileReport, CompressedClips};
+use sinew_pipeline::compile::{
+    compile_compressed, compress_clips_timed, CompileReport, CompressedClips,
+};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
@@ -75,6 +77,7 @@ pub fn details(
         splits,
         diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
         textures: Vec::new(),
+        timings: None,
     }
 }
 
@@ -96,19 +99,19 @@ pub fn write_scene(
     compress: Option<&CompressOptions>,
 ) -> anyhow::Result<Written> {
     let compressed = compress_scene_clips(&scene.clips, scene.skeleton.as_ref(), input, compress)?;
-    write_compressed(scene, input, output, compressed)
+    write_compressed(scene, input, output, compressed.map(|c| c.0))
 }
 
 /// The clip half of [`write_scene`]: a scene's clips compiled and compressed (`None` without
-/// compression); `skeleton` is the scene's.
+/// compression), with each clip's encoding time in seconds; `skeleton` is the scene's.
 fn compress_scene_clips(
     clips: &[SceneClip],
     skeleton: Option<&Skeleton>,
     input: &str,
     compress: Option<&CompressOptions>,
-) -> anyhow::Result<Option<CompressedClips>> {
+) -> anyhow::Result<Option<(CompressedClips, Vec<f64>)>> {
     compress
-        .map(|o| compress_clips(clips, skeleton, o))
+        .map(|o| compress_clips_timed(clips, skeleton, o))
         .transpose()
         .map_err(|e| anyhow!("{input}: compiling: {e}"))
 }
@@ -153,6 +156,8 @@ struct Plan {
     textures: bool,
     /// `--strict`: an input with a warning fails and writes nothing.
     strict: bool,
+    /// `--timings`: each step's wall time goes into the report.
+    timings: bool,
     /// `--incremental`: the records and where they go.
     record: Option<RecordPlan>,
 }
@@ -165,10 +170,17 @@ struct RecordPlan {
     loaded: incremental::Loaded,
 }
 
-/// A converted input, not yet written: its report and its files (texture PNGs, then the `.sinew`).
+/// A converted input, not yet written: its report and its files (texture PNGs, then the `.sinew`),
+/// and the wall times of its steps (the import and writing are added by [`run_job`]).
 struct Built {
     details: OutputDetails,
     files: Vec<(std::path::PathBuf, Vec<u8>)>,
+    timings: Timings,
+}
+
+/// Milliseconds since `start`.
+fn ms_since(start: std::time::Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1000.0
 }
 
 /// What became of one input.
@@ -187,6 +199,7 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
     let (input, output) = (&job.input, &job.output);
     let label = input.display().to_string();
     steps::check_not_empty(&scene, &label)?;
+    let prepared = std::time::Instant::now();
     let cuts = match &plan.clips {
         Some(spec) => steps::cut(&mut scene, spec, &label)?,
         None => Vec::new(),
@@ -203,6 +216,7 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
         )?);
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
+    let prepare_ms = ms_since(prepared);
     // LODs (meshes) and clip compression (clips) read and write different parts of the scene and
     // are the two costly steps: they run at the same time. Each gives what it gives alone; a LOD
     // error is reported first, as when they ran in turn.
@@ -224,8 +238,12 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
             )
         },
     );
-    lods?;
-    let compressed = compressed?;
+    let lod_times = lods?;
+    let (compressed, encode_seconds) = match compressed? {
+        Some((c, s)) => (Some(c), s),
+        None => (None, Vec::new()),
+    };
+    let texturing = std::time::Instant::now();
     // Textures first: a written .sinew always has its textures beside it.
     let mut files = Vec::new();
     if plan.textures && !scene.images.is_empty() {
@@ -239,7 +257,10 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
             files.push((output.with_file_name(&name), bytes));
         }
     }
+    let textures_ms = ms_since(texturing);
+    let compiling = std::time::Instant::now();
     let (bytes, report) = compile_bytes(&scene, &label, compressed)?;
+    let write_ms = ms_since(compiling);
     let written = Written {
         bytes: bytes.len() as u64,
         report,
@@ -247,7 +268,36 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
     let mut d = details(&scene, written, motions, cuts, splits);
     d.textures = files.iter().map(|(p, _)| p.display().to_string()).collect();
     files.push((output.clone(), bytes));
-    Ok(Built { details: d, files })
+    let timings = Timings {
+        prepare_ms,
+        lods: scene
+            .meshes
+            .iter()
+            .zip(lod_times)
+            .map(|(m, t)| MeshTimings {
+                mesh: m.name.clone(),
+                optimize_ms: t.optimize * 1000.0,
+                levels_ms: t.levels.iter().map(|s| s * 1000.0).collect(),
+            })
+            .collect(),
+        clips: scene
+            .clips
+            .iter()
+            .zip(encode_seconds)
+            .map(|(c, s)| ClipTiming {
+                clip: c.name.clone(),
+                encode_ms: s * 1000.0,
+            })
+            .collect(),
+        textures_ms,
+        write_ms,
+        ..Timings::default()
+    };
+    Ok(Built {
+        details: d,
+        files,
+        timings,
+    })
 }
 
 /// Converts job `i`, or keeps its output when its record still holds; with `--strict` a warning
@@ -261,8 +311,11 @@ fn run_job(i: usize, job: &Job, plan: &Plan) -> (Outcome, Vec<Stamp>) {
             return (Outcome::Reused(Box::new(rec.clone())), reads);
         }
     }
-    let (scene, reads) = crate::input::import_tracked(&job.input, job.format, &plan.import);
-    let built = match scene.and_then(|scene| convert_one(job, plan, scene)) {
+    let started = std::time::Instant::now();
+    let (scene, reads) =
+        crate::input::import_tracked(&job.input, job.format, &plan.import, plan.record.is_some());
+    let import_ms = ms_since(started);
+    let mut built = match scene.and_then(|scene| convert_one(job, plan, scene)) {
         Ok(b) => b,
         Err(e) => return (Outcome::Failed(e), reads),
     };
@@ -271,7 +324,18 @@ fn run_job(i: usize, job: &Job, plan: &Plan) -> (Outcome, Vec<Stamp>) {
         let line = strict_error(&job.input.display().to_string(), &warnings);
         return (Outcome::Strict(built.details, line), reads);
     }
-    match write_built(job, plan, &built, &reads, warnings.len()) {
+    let writing = std::time::Instant::now();
+    let written = write_built(job, plan, &built, &reads, warnings.len());
+    // Timings go into the report after the incremental record was written: they are not part of
+    // what a reused output reports.
+    if plan.timings {
+        let mut t = std::mem::take(&mut built.timings);
+        t.import_ms = import_ms;
+        t.write_ms += ms_since(writing);
+        t.total_ms = ms_since(started);
+        built.details.timings = Some(t);
+    }
+    match written {
         Ok(()) => (Outcome::Converted(built.details), reads),
         Err(e) => (Outcome::Failed(e), reads),
     }
@@ -417,7 +481,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let mut extra = Vec::new();
     let mut anims = Vec::with_capacity(args.anim.len());
     for a in &args.anim {
-        let (scene, reads) = crate::input::import_tracked(a, None, &args.import);
+        let (scene, reads) = crate::input::import_tracked(a, None, &args.import, args.incremental);
         anims.push((a.display().to_string(), scene?));
         extra.extend(reads);
     }
@@ -458,6 +522,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         compress,
         textures: !args.no_textures,
         strict: args.strict,
+        timings: args.timings,
         record,
     };
 
@@ -772,6 +837,43 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         if diag.level == "warning" {
             let _ = writeln!(o, "  warning [{}] {}", diag.code, diag.message);
         }
+    }
+    if let Some(t) = &d.timings {
+        o.push_str(&human_timings(t));
+    }
+    o
+}
+
+/// The `--timings` lines of the human summary.
+fn human_timings(t: &Timings) -> String {
+    let ms = |x: f64| format!("{x:.1} ms");
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "  timings: total {}, import {}, prepare {}, textures {}, write {}",
+        ms(t.total_ms),
+        ms(t.import_ms),
+        ms(t.prepare_ms),
+        ms(t.textures_ms),
+        ms(t.write_ms)
+    );
+    for m in &t.lods {
+        let levels: Vec<String> = m
+            .levels_ms
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| format!("LOD {} {}", k + 1, ms(x)))
+            .collect();
+        let _ = writeln!(
+            o,
+            "    mesh \"{}\": optimize {}, {}",
+            m.mesh,
+            ms(m.optimize_ms),
+            levels.join(", ")
+        );
+    }
+    for c in &t.clips {
+        let _ = writeln!(o, "    clip \"{}\": encode {}", c.clip, ms(c.encode_ms));
     }
     o
 }

@@ -265,6 +265,50 @@ pub struct OutputDetails {
     pub diagnostics: Vec<DiagnosticReport>,
     /// PNG files written beside the output for the textures the source carried (Half-Life).
     pub textures: Vec<String>,
+    /// Wall times of the steps (`convert --timings` only; absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings: Option<Timings>,
+}
+
+/// Wall times of one input's conversion, milliseconds (`convert --timings`). The LODs and the clip
+/// encoder run at the same time, and meshes and clips each in parallel, so these times overlap:
+/// `total_ms` is the input's whole conversion.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct Timings {
+    /// Reading and importing the input (and its companions).
+    pub import_ms: f64,
+    /// Binding `--anim` motions, `--clips` cuts and partial-body splits.
+    pub prepare_ms: f64,
+    /// Per mesh: its LOD work.
+    pub lods: Vec<MeshTimings>,
+    /// Per clip: its encoding (compression); empty with `--no-compress`.
+    pub clips: Vec<ClipTiming>,
+    /// Writing textures beside the output.
+    pub textures_ms: f64,
+    /// Compiling the scene, encoding the `.sinew` bytes and writing the file.
+    pub write_ms: f64,
+    /// The whole conversion of this input.
+    pub total_ms: f64,
+}
+
+/// One mesh's LOD wall times.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshTimings {
+    /// Mesh name.
+    pub mesh: String,
+    /// Vertex-cache optimisation of LOD 0.
+    pub optimize_ms: f64,
+    /// Each generated LOD (simplification, repair, error measurement), LOD 1 first.
+    pub levels_ms: Vec<f64>,
+}
+
+/// One clip's encoding wall time.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClipTiming {
+    /// Clip name.
+    pub clip: String,
+    /// Compression of the clip.
+    pub encode_ms: f64,
 }
 
 /// One mesh of the output.

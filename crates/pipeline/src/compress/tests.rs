@@ -587,3 +587,74 @@ fn a_rotation_lever_reaches_through_joints_that_do_not_compensate() {
     );
     assert!(close(helper[1], 0.4) && close(helper[2], 0.4), "{helper:?}");
 }
+
+/// [`swing`] with `extra` slerped keys inserted in every interval, as an importer adds keys where a
+/// file's own interpolation needs them.
+fn densified_swing(skeleton: &Skeleton, keys: usize, extra: usize) -> Clip {
+    let coarse = swing(skeleton, keys).to_plain();
+    let times = coarse.times();
+    let rig = Rig::new(&coarse, Some(skeleton), 0.1).unwrap();
+    let poses = rig.poses(&coarse, times);
+    let mut dense_times = Vec::new();
+    let mut dense: Vec<Vec<Quat>> = vec![Vec::new(); skeleton.len()];
+    for k in 0..times.len() {
+        let steps = if k + 1 < times.len() { extra + 1 } else { 1 };
+        for i in 0..steps {
+            let u = i as f32 / (extra + 1) as f32;
+            let t = times[k] + u * times.get(k + 1).map_or(0.0, |n| n - times[k]);
+            dense_times.push(t);
+            for (j, track) in dense.iter_mut().enumerate() {
+                let a = poses[k][j].rotation;
+                let b = poses.get(k + 1).map_or(a, |p| p[j].rotation);
+                track.push(a.slerp(b, u));
+            }
+        }
+    }
+    let tracks = skeleton
+        .names()
+        .iter()
+        .zip(dense)
+        .map(|(name, rotation)| TrackCurves {
+            joint: name.clone(),
+            rotation: Curve::new(dense_times.clone(), rotation),
+            ..Default::default()
+        })
+        .collect();
+    let last = *dense_times.last().unwrap();
+    Clip::from_curves("dense", last, 30.0, false, false, tracks).unwrap()
+}
+
+#[test]
+fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() {
+    let skeleton = chain(6, 0.3);
+    let clip = densified_swing(&skeleton, 31, 7).to_plain();
+    assert_eq!(clip.times().len(), 30 * 8 + 1);
+    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
+    let src = rig.all_points(&rig.poses(&clip, clip.times()));
+    // At 0.01 the slerped keys are within 1% of the tolerance of their neighbours' interpolation:
+    // the thinned source keeps far fewer than four fifths of the times, all of them source times.
+    let thin = thinned(&clip, &rig, &src, 0.01).expect("thinned");
+    assert!(
+        thin.times().len() * 5 < clip.times().len() * 4,
+        "{}",
+        thin.times().len()
+    );
+    assert!(thin.times().iter().all(|t| clip.times().contains(t)));
+    let options = CompressOptions {
+        tolerance: Some(0.01),
+        error_distance: Some(0.1),
+        ..CompressOptions::default()
+    };
+    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
+    assert!(c.is_compressed());
+    // Measured at every source time, the thinned ones included.
+    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.01, "error {worst}");
+    assert_eq!(r.max_error, worst);
+    assert!(c.times().iter().all(|t| clip.times().contains(t)));
+    // At a tolerance where slerp and nlerp differ by more than 1% of it, nothing is left out.
+    let src = rig.all_points(&rig.poses(&clip, clip.times()));
+    assert!(thinned(&clip, &rig, &src, 1e-7).is_none());
+}

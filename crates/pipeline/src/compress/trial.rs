@@ -16,8 +16,9 @@
 use super::eval::Eval;
 use super::metric::exceeds;
 use super::quantize::{raw_rotation, Kind, Quant};
-use sinew_core::clip::normalize_rotation;
-use sinew_core::glam::{Affine3A, Quat};
+use sinew_core::clip::{nlerp, normalize_rotation};
+use sinew_core::glam::{Affine3A, Quat, Vec3};
+use sinew_core::Transform;
 
 /// "None" for the `usize` fields of a [`Row`].
 const NONE: usize = usize::MAX;
@@ -36,6 +37,8 @@ struct Row {
     /// Its rotation's first component and rotation number, or [`NONE`] when not quantized.
     fr: usize,
     ri: usize,
+    /// Its scale where the clip does not quantize it (the local scale at every time), else `None`.
+    fixed_scale: Option<Vec3>,
 }
 
 /// The buffers of one tentative change (reused from trial to trial; `Default`: empty).
@@ -56,6 +59,9 @@ pub(super) struct Trial {
     rows: Vec<Row>,
     /// Per slot (as `qi`): the quantization parameters of that component in the segment.
     slot_quant: Vec<Quant>,
+    /// The changed component's kind, and for a translation its channel's first component.
+    kind: Option<Kind>,
+    first_t: usize,
     /// Per segment key: requantized (each key once; a time reads only requantized keys).
     key_done: Vec<bool>,
     /// Per segment key: how many subtree joints (the first ones, in order) were requantized at it
@@ -118,6 +124,9 @@ impl Trial {
         self.quant = e.layout.params(s, c, bits);
         self.j = j;
         self.rot = e.layout.comps[c].kind == Kind::R;
+        self.kind = Some(e.layout.comps[c].kind);
+        let track = e.layout.comps[c].track;
+        self.first_t = e.first[track][Kind::T as usize].unwrap_or(NONE);
         self.key0 = keys.start;
         self.nk = keys.len();
         self.set_rows(e);
@@ -230,6 +239,7 @@ impl Trial {
             let fr = e.track_of[d]
                 .and_then(|tr| e.first[tr][Kind::R as usize])
                 .unwrap_or(NONE);
+            let scaled = e.track_of[d].is_some_and(|tr| e.first[tr][Kind::S as usize].is_some());
             self.rows.push(Row {
                 d,
                 np: if n > 0 { parents[n] } else { NONE },
@@ -241,6 +251,7 @@ impl Trial {
                 } else {
                     e.layout.comps[fr].rot
                 },
+                fixed_scale: (!scaled).then_some(e.base[d].scale),
             });
             if self.rot {
                 for a in 0..3 {
@@ -275,30 +286,49 @@ impl Trial {
             let d = row.d;
             let local = if self.dirty[n] {
                 // Only the changed translation or scale component, or the subtree's rotations,
-                // differ from the state.
-                let local = if row.track == NONE {
-                    e.base[d]
-                } else if self.rot {
-                    e.sampled_with(
-                        row.track,
-                        i,
-                        e.base[d],
-                        |x, k| e.dec[x][k],
-                        |ri, k| self.raw_of(e, n, ri, k),
-                    )
-                } else {
-                    e.sampled_with(
-                        row.track,
-                        i,
-                        e.base[d],
-                        |x, k| match self.in_segment(k).filter(|_| x == self.c) {
-                            Some(kk) if self.key_done[kk] => self.dec[kk],
-                            _ => e.dec[x][k],
-                        },
-                        |ri, k| e.raw[ri][k],
-                    )
+                // differ from the state: the rest of the local transform is the state's (the
+                // values `Transform::to_affine` of the sampled pose gives, bit for bit).
+                let state = e.local_aff[i * nj + d];
+                let a = match (self.kind, row.fixed_scale) {
+                    (Some(Kind::R), Some(scale)) if row.fr != NONE => {
+                        let (k0, k1, alpha) = e.at[i];
+                        let rot = if alpha == 0.0 {
+                            normalize_rotation(self.raw_of(e, n, row.ri, k0))
+                        } else {
+                            nlerp(
+                                self.raw_of(e, n, row.ri, k0),
+                                self.raw_of(e, n, row.ri, k1),
+                                alpha,
+                            )
+                        };
+                        Affine3A::from_scale_rotation_translation(
+                            scale,
+                            rot,
+                            state.translation.into(),
+                        )
+                    }
+                    (Some(Kind::T), _) if self.first_t != NONE => {
+                        let (k0, k1, alpha) = e.at[i];
+                        let f = self.first_t;
+                        let v = |k: usize| {
+                            let at = |x: usize| match self.in_segment(k).filter(|_| x == self.c) {
+                                Some(kk) if self.key_done[kk] => self.dec[kk],
+                                _ => e.dec[x][k],
+                            };
+                            Vec3::new(at(f), at(f + 1), at(f + 2))
+                        };
+                        let t = if alpha == 0.0 {
+                            v(k0)
+                        } else {
+                            v(k0).lerp(v(k1), alpha)
+                        };
+                        Affine3A {
+                            matrix3: state.matrix3,
+                            translation: t.into(),
+                        }
+                    }
+                    _ => self.sampled_local(e, n, i).to_affine(),
                 };
-                let a = local.to_affine();
                 self.local_aff[at] = a;
                 self.local_set[at] = true;
                 a
@@ -325,6 +355,35 @@ impl Trial {
             worst = worst.max(r);
         }
         Some(worst)
+    }
+
+    /// Subtree joint `n`'s local pose at source time `i` as the sampler computes it, with the
+    /// trial's values.
+    fn sampled_local(&self, e: &Eval, n: usize, i: usize) -> Transform {
+        let row = self.rows[n];
+        let d = row.d;
+        if row.track == NONE {
+            e.base[d]
+        } else if self.rot {
+            e.sampled_with(
+                row.track,
+                i,
+                e.base[d],
+                |x, k| e.dec[x][k],
+                |ri, k| self.raw_of(e, n, ri, k),
+            )
+        } else {
+            e.sampled_with(
+                row.track,
+                i,
+                e.base[d],
+                |x, k| match self.in_segment(k).filter(|_| x == self.c) {
+                    Some(kk) if self.key_done[kk] => self.dec[kk],
+                    _ => e.dec[x][k],
+                },
+                |ri, k| e.raw[ri][k],
+            )
+        }
     }
 
     /// Writes the trial's changes into `e` (the state it was run on, unchanged since).

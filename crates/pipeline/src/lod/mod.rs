@@ -637,6 +637,18 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<GeneratedLod>, LodError> {
+    build_lods_timed(mesh, skeleton, options, tuning, &mut Vec::new())
+}
+
+/// [`build_lods_tuned`], pushing each level's wall time in seconds (with its repair and
+/// measurement) onto `seconds`.
+fn build_lods_timed(
+    mesh: &Mesh,
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+    seconds: &mut Vec<f64>,
+) -> Result<Vec<GeneratedLod>, LodError> {
     options.validate()?;
     validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
         mesh: mesh.name.clone(),
@@ -692,6 +704,7 @@ pub fn build_lods_tuned(
     let mut out: Vec<GeneratedLod> = Vec::with_capacity(options.ratios.len());
     let mut previous = mesh.geometry.clone();
     let mut accumulated = 0.0f32;
+    let mut started = std::time::Instant::now();
     for (k, &ratio) in options.ratios.iter().enumerate() {
         let target = ((base_tris as f64) * ratio as f64).round() as usize;
         let budget = if tuning.chain {
@@ -800,6 +813,9 @@ pub fn build_lods_tuned(
         if tuning.chain {
             previous = lod;
         }
+        let now = std::time::Instant::now();
+        seconds.push(now.duration_since(started).as_secs_f64());
+        started = now;
     }
     Ok(out)
 }
@@ -845,22 +861,49 @@ pub fn generate_mesh_lods(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
+    generate_mesh_lods_timed(meshes, skeleton, options, tuning).map(|(r, _)| r)
+}
+
+/// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MeshLodTimes {
+    /// Vertex-cache optimisation of LOD 0.
+    pub optimize: f64,
+    /// Each generated level (simplification, repair and error measurement), most detailed first.
+    pub levels: Vec<f64>,
+}
+
+/// [`generate_mesh_lods`], with each mesh's wall times (mesh order; meshes run in parallel, so
+/// the times overlap).
+pub fn generate_mesh_lods_timed(
+    meshes: &mut [Mesh],
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+) -> Result<(Vec<MeshLodReport>, Vec<MeshLodTimes>), LodError> {
     options.validate()?;
-    let one = |mesh: &mut Mesh| -> Result<MeshLodReport, LodError> {
+    let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
+        let started = std::time::Instant::now();
         optimize_base(mesh)?;
-        mesh.lods = build_lods_tuned(mesh, skeleton, options, tuning)?;
-        Ok(MeshLodReport {
+        let mut times = MeshLodTimes {
+            optimize: started.elapsed().as_secs_f64(),
+            levels: Vec::new(),
+        };
+        mesh.lods = build_lods_timed(mesh, skeleton, options, tuning, &mut times.levels)?;
+        let report = MeshLodReport {
             mesh: mesh.name.clone(),
             base_triangles: mesh.geometry.triangle_count(),
             lods: mesh.lods.clone(),
-        })
+        };
+        Ok((report, times))
     };
-    let done: Vec<Result<MeshLodReport, LodError>> = if meshes.len() > 1 {
+    let done: Vec<Result<(MeshLodReport, MeshLodTimes), LodError>> = if meshes.len() > 1 {
         meshes.par_iter_mut().map(one).collect()
     } else {
         meshes.iter_mut().map(one).collect()
     };
-    done.into_iter().collect()
+    let done: Vec<(MeshLodReport, MeshLodTimes)> = done.into_iter().collect::<Result<_, _>>()?;
+    Ok(done.into_iter().unzip())
 }
 
 #[cfg(test)]

@@ -28,7 +28,7 @@ fn map_in_order<T: Send, R: Send>(
     }
 }
 
-/// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors sqrt(2)
+/// Step 3, first part, for one layout: the largest uniform budget, on a ladder of factors 2^(1/4)
 /// from `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits;
 /// returns the budget, the widths and the stored integers they give (per component, per key).
 ///
@@ -77,7 +77,9 @@ pub(super) fn first_eval<'a>(
     // the start passing and the rung above failing, then takes one round, and a rung measured in
     // vain is above a failing one, so it usually fails early too. The rungs and the answer are
     // those of one rung at a time.
-    let step = std::f32::consts::SQRT_2;
+    // 2^(1/4): rungs finer than sqrt(2) start the refinement nearer its result (corpus clips -0.26%
+    // in total at 0.001 @ 0.1, Fox Walk -4%; encoder time -9% to +4% per file).
+    let step: f32 = std::f32::consts::SQRT_2.sqrt();
     let mut budget = start;
     let both = |a: f32, b: f32, p: Option<usize>| {
         if par {
@@ -91,7 +93,7 @@ pub(super) fn first_eval<'a>(
     let up = noted(r1, probe);
     if found.is_some() {
         let mut next = Some(up);
-        for _ in 0..8 {
+        for _ in 0..16 {
             let Some(up) = next.take() else { break };
             let Some(f) = up else { break };
             budget *= step;
@@ -108,7 +110,7 @@ pub(super) fn first_eval<'a>(
     } else {
         // Down one rung at a time: a second rung measured ahead would usually pass as well, a
         // whole measurement wasted.
-        for _ in 0..40 {
+        for _ in 0..80 {
             budget /= step;
             found = noted(passes(budget, *probe), probe);
             if found.is_some() {

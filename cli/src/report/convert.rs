@@ -181,6 +181,23 @@ pub struct MeshOut {
     pub triangles: usize,
     /// Generated LODs, most detailed first (same fields as `inspect`).
     pub lods: Vec<LodReport>,
+    /// LOD levels asked for and not written, and why.
+    pub lods_not_built: Vec<NotBuiltReport>,
+}
+
+/// A LOD level that was asked for and not written (instead of a copy of the level before it).
+#[derive(Debug, Serialize)]
+pub struct NotBuiltReport {
+    /// The level it would have had.
+    pub level: usize,
+    /// Requested fraction of LOD 0's triangles.
+    pub target_ratio: f32,
+    /// Triangles of the level it would have been simplified from.
+    pub previous_triangles: usize,
+    /// Triangles simplification stopped at; `null` when it was not attempted.
+    pub reached_triangles: Option<usize>,
+    /// `error-limit`, `no-collapse` or `previous-not-built`.
+    pub reason: &'static str,
 }
 
 /// One clip of the output.

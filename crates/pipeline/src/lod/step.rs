@@ -175,14 +175,32 @@ fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
 ///   otherwise, and reports.
 ///
 /// `of` is each vertex's submesh ([`submesh_of`]).
+#[cfg(test)]
 pub(super) fn vertex_flags(
     lod: &Lod,
     of: &[u32],
     lock_borders: bool,
     open_uv_seams: bool,
 ) -> Vec<SimplifyVertex> {
+    vertex_flags_with(
+        lod,
+        of,
+        &position_ids(&lod.positions),
+        lock_borders,
+        open_uv_seams,
+    )
+}
+
+/// [`vertex_flags`] with the positions' ids ([`position_ids`]) given.
+fn vertex_flags_with(
+    lod: &Lod,
+    of: &[u32],
+    ids: &(usize, Vec<u32>),
+    lock_borders: bool,
+    open_uv_seams: bool,
+) -> Vec<SimplifyVertex> {
     const NONE: u32 = u32::MAX;
-    let (count, id_of) = position_ids(&lod.positions);
+    let (count, id_of) = (ids.0, &ids.1);
     // Per position: the first submesh using it, and whether another submesh uses it too.
     let mut owner = vec![NONE; count];
     let mut shared = vec![false; count];
@@ -282,6 +300,7 @@ pub(super) struct Step<'a> {
     weights: [f32; ATTRIBUTE_COUNT],
     flags: SimplifyOptions,
     of: Vec<u32>,
+    ids: (usize, Vec<u32>),
     whole: bool,
 }
 
@@ -311,13 +330,20 @@ impl<'a> Step<'a> {
             weights,
             flags,
             of: submesh_of(source),
+            ids: position_ids(&source.positions),
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
         }
     }
 
     /// The per-vertex flags ([`vertex_flags`]) with `keep`'s positions locked or given priority.
     fn flags(&self, lock_borders: bool, keep: &Anchors) -> Vec<SimplifyVertex> {
-        let mut locks = vertex_flags(self.source, &self.of, lock_borders, keep.open_uv_seams);
+        let mut locks = vertex_flags_with(
+            self.source,
+            &self.of,
+            &self.ids,
+            lock_borders,
+            keep.open_uv_seams,
+        );
         for (l, p) in locks.iter_mut().zip(&self.source.positions) {
             let bits = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
             if keep.hard.binary_search(&bits).is_ok() {

@@ -91,7 +91,8 @@ pub(super) fn split_shared(lod: &Lod) -> Option<Lod> {
 }
 
 /// Merges vertices that are bit-for-bit equal in position, UV, joints and weights (and normal, unless
-/// `ignore_normals`) and used by the same submesh, with meshoptimizer's `generateVertexRemap`. Lossless when normals count; with
+/// `ignore_normals`) and used by the same submesh, with meshoptimizer's `generateVertexRemap`, and
+/// drops triangles with two corners at one position. Lossless when normals count; with
 /// `ignore_normals` the merged vertices get area-weighted normals of the welded surface (used only as
 /// a simplification attribute; [`flat_soup`] rebuilds face normals afterwards). `lod` must be valid.
 pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
@@ -129,8 +130,40 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
         }
     }
     let pick = |f: &u32| *f as usize;
-    let indices: Vec<u32> = lod.indices.iter().map(|&i| remap[i as usize]).collect();
     let positions: Vec<glam::Vec3> = first.iter().map(|f| lod.positions[pick(f)]).collect();
+    // Triangles with two corners at one position have no area: they are dropped (the surface
+    // does not change; meshoptimizer would drop them in its first pass anyway, past its target).
+    let flat = |t: &[u32]| {
+        let [a, b, c] = [0, 1, 2].map(|k| positions[remap[t[k] as usize] as usize]);
+        a == b || b == c || a == c
+    };
+    let mut indices: Vec<u32> = Vec::with_capacity(lod.indices.len());
+    let mut submeshes = lod.submeshes.clone();
+    let ranges: Vec<(usize, usize)> = if lod.submeshes.is_empty() {
+        vec![(0, lod.indices.len())]
+    } else {
+        lod.submeshes
+            .iter()
+            .map(|s| {
+                (
+                    s.first_index as usize,
+                    (s.first_index + s.index_count) as usize,
+                )
+            })
+            .collect()
+    };
+    for (k, (from, to)) in ranges.into_iter().enumerate() {
+        let start = indices.len();
+        for t in lod.indices[from..to].chunks_exact(3) {
+            if !flat(t) {
+                indices.extend(t.iter().map(|&i| remap[i as usize]));
+            }
+        }
+        if let Some(sub) = submeshes.get_mut(k) {
+            sub.first_index = start as u32;
+            sub.index_count = (indices.len() - start) as u32;
+        }
+    }
     let normals = if ignore_normals {
         let mut acc = vec![glam::Vec3::ZERO; unique];
         for t in indices.chunks_exact(3) {
@@ -166,7 +199,7 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
             first.iter().map(|f| lod.weights[pick(f)]).collect()
         },
         indices,
-        submeshes: lod.submeshes.clone(),
+        submeshes,
         error: lod.error,
     }
 }

@@ -1,24 +1,25 @@
-//! sinew's LODs against native gltfpack at equal triangle counts, rest and posed (docs/lod.md,
-//! "Against gltfpack").
+//! sinew's LODs against native gltfpack at equal triangle counts, per mesh, at rest and posed
+//! (docs/lod.md, "Against gltfpack at equal triangle counts"; driven by tools/lod-compare.sh).
 //!
 //! `cargo run --release -p sinew-pipeline --example lod_peers -- --gltfpack PATH [--pose-at F]...
-//! FILE.glb|FILE.gltf...`
+//! [--min-triangles N] FILE.glb|FILE.gltf...`
 //!
 //! For each glTF file (other formats: export them first with `sinew export FILE -o FILE.glb`, which
-//! is then the reference for both tools) it prints one JSON object per line:
-//! - `sinew`: sinew's default LODs (`LodOptions::default()`), each level's triangles, reported error
-//!   and measured distances;
-//! - for each gltfpack setting (`-si 0.5` / `-si 0.25`, the same with `-sa`, and `-sa` at the
-//!   ratios sinew's own LODs reached), gltfpack's output per level and sinew's chain built at the
-//!   counts gltfpack reached (`matched`: the same options with the error limit lifted, so that the
-//!   counts, not the error budget, decide), both measured the same way.
+//! is then the reference for both tools) and each of its meshes of at least N triangles (default
+//! 24) it prints one JSON object per line:
+//! - `"tool":"sinew"`: sinew's default chain (`LodOptions::default()`): each level's triangles,
+//!   reported error and measured distances;
+//! - `"tool":"gltfpack"`: for each gltfpack setting (`-si 0.5` and `-si 0.25`: `si`; the same with
+//!   `-sa`: `si-sa`; always `-kn -noq`, so that meshes are kept apart and unquantized), gltfpack's
+//!   mesh at that level and sinew's chain of that mesh built at the triangle counts gltfpack reached
+//!   (`matched_*`).
 //!
 //! Distances: the symmetric sampled Hausdorff distance of `sinew_testdata::geometry` (vertices,
-//! centroids, edge midpoints of each mesh against the other's surface), over all meshes of a level
-//! as one triangle soup, in % of LOD 0's bind-pose bounding-box diagonal; `posed` with both skinned
-//! by the reference's first clip at each `--pose-at` fraction of its duration (default 0.5), with
-//! the reference's palette when the other file has the same joints and inverse bind matrices, else
-//! with its own first clip at the same time. gltfpack runs with `-noq` (no quantization).
+//! centroids, edge midpoints of each mesh against the other's surface), in % of the mesh's LOD 0
+//! bind-pose bounding-box diagonal; `posed` with both skinned by the reference's first clip at each
+//! `--pose-at` fraction of its duration (default 0.5), with the reference's palette when
+//! gltfpack's output has the same joints and inverse bind matrices, else with its own first clip at
+//! the same time.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use sinew_core::glam::{Mat4, Vec3};

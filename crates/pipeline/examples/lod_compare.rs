@@ -30,14 +30,24 @@ use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::Path;
 use std::time::Instant;
 
+/// A mesh's LOD at `level` (None: LOD 0); a mesh without that level (not built) gives the last
+/// level it has, which is what the runtime draws there.
+fn level_of(m: &sinew_scene::Mesh, level: Option<usize>) -> &Lod {
+    match level {
+        None => &m.geometry,
+        Some(k) => m
+            .lods
+            .get(k)
+            .or(m.lods.last())
+            .map_or(&m.geometry, |g| &g.lod),
+    }
+}
+
 /// All meshes of a LOD level (None: LOD 0) as one soup, optionally posed by `palette`.
 fn soup(scene: &Scene, level: Option<usize>, palette: Option<&[Mat4]>) -> (Vec<Vec3>, Vec<u32>) {
     let (mut p, mut i) = (Vec::new(), Vec::new());
     for m in &scene.meshes {
-        let lod: &Lod = match level {
-            None => &m.geometry,
-            Some(k) => &m.lods[k].lod,
-        };
+        let lod = level_of(m, level);
         let base = p.len() as u32;
         match palette {
             Some(pal) if lod.is_skinned() => {
@@ -104,10 +114,7 @@ fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     scene
         .meshes
         .iter()
-        .map(|m| match level {
-            None => m.geometry.triangle_count(),
-            Some(k) => m.lods[k].lod.triangle_count(),
-        })
+        .map(|m| level_of(m, level).triangle_count())
         .sum()
 }
 

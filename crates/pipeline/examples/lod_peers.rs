@@ -112,12 +112,15 @@ fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     soup(scene, level, None).1.len() / 3
 }
 
+/// A mesh (or soup) as positions and triangle indices.
+type Soup = (Vec<Vec3>, Vec<u32>);
+
 struct Reference {
     scene: Scene,
-    rest: (Vec<Vec3>, Vec<u32>),
+    rest: Soup,
     diag: f32,
     /// Per pose fraction: its palette and LOD 0 posed.
-    poses: Vec<(f32, Vec<Mat4>, (Vec<Vec3>, Vec<u32>))>,
+    poses: Vec<(f32, Vec<Mat4>, Soup)>,
 }
 
 impl Reference {

@@ -95,6 +95,10 @@ pub struct ImportArgs {
     /// glTF: index of the skin that becomes the skeleton (default: the first, with a note).
     #[arg(long, value_name = "N")]
     pub gltf_skin: Option<usize>,
+    /// Half-Life: convert without a file the model names that is missing (a QC's SMD, an MDL's
+    /// texture or sequence-group file), with a warning, instead of stopping with an error.
+    #[arg(long)]
+    pub allow_missing: bool,
 }
 
 /// `--ms3d-position-keys` values.
@@ -190,7 +194,7 @@ pub enum EffortArg {
 }
 
 /// `sinew convert`.
-#[derive(Debug, Args)]
+#[derive(Debug, Args, Clone)]
 pub struct ConvertArgs {
     /// Input files (.ms3d, .gltf, .glb, .obj, .bvh, .mdl, .smd, .qc, .sinew), or folders (with
     /// --out-dir): every model in a folder is converted, recognised by content.
@@ -209,6 +213,16 @@ pub struct ConvertArgs {
     /// Worker threads for batch mode (default: all cores).
     #[arg(long, short = 'j', value_name = "N")]
     pub jobs: Option<usize>,
+    /// Add each step's wall time (import, each LOD, each clip's encode, write) to the report.
+    #[arg(long)]
+    pub timings: bool,
+    /// Fail an input that raises any warning (nothing is written for it; a batch exits 1).
+    #[arg(long)]
+    pub strict: bool,
+    /// Keep the outputs of inputs whose files, options and sinew version are unchanged since they
+    /// were written (a record in OUT-DIR/.sinew-incremental/); redo the rest.
+    #[arg(long)]
+    pub incremental: bool,
     /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
     #[arg(long, value_name = "FILE")]
     pub anim: Vec<PathBuf>,

@@ -13,6 +13,8 @@
 pub mod batch;
 pub mod cli;
 pub mod commands;
+pub mod digest;
+pub mod incremental;
 pub mod input;
 pub mod output;
 pub mod report;

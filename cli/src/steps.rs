@@ -320,6 +320,27 @@ fn part(c: &SceneClip) -> PartReport {
     }
 }
 
+/// Refuses a scene with nothing to convert: no joint, no mesh and no clip (an empty glTF, an SMD
+/// without nodes, a QC whose SMDs were all left out), as an empty OBJ is refused by its importer.
+pub fn check_not_empty(scene: &Scene, file: &str) -> anyhow::Result<()> {
+    let joints = scene.skeleton.as_ref().map_or(0, |s| s.len());
+    if joints == 0 && scene.meshes.is_empty() && scene.clips.is_empty() {
+        let why: Vec<String> = scene
+            .diagnostics
+            .iter()
+            .filter(|d| d.level == sinew_scene::Level::Warning)
+            .map(|d| format!("[{}] {}", d.code, d.message))
+            .collect();
+        let why = if why.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", why.join("; "))
+        };
+        bail!("{file}: nothing to convert: the file holds no joint, mesh or clip{why}");
+    }
+    Ok(())
+}
+
 /// Checks every joint of the plan against the skeleton; the error names the file and the joint.
 pub fn check_split(scene: &Scene, plan: &SplitPlan, file: &str) -> anyhow::Result<()> {
     if plan.is_empty() {
@@ -456,29 +477,35 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
     let Scene {
         meshes, skeleton, ..
     } = scene;
-    mesh_lods(meshes, skeleton.as_ref(), options, file)
+    mesh_lods(meshes, skeleton.as_ref(), options, file).map(|_| ())
 }
 
 /// [`lods`] on a scene's meshes alone (`skeleton` is the scene's), so that its clips can be worked
-/// on at the same time.
+/// on at the same time. Returns each mesh's wall times (empty for `None`).
 pub fn mesh_lods(
     meshes: &mut [sinew_scene::Mesh],
     skeleton: Option<&sinew_core::Skeleton>,
     options: Option<&LodOptions>,
     file: &str,
-) -> anyhow::Result<()> {
+) -> anyhow::Result<Vec<sinew_pipeline::lod::MeshLodTimes>> {
     match options {
         None => {
             for m in meshes {
                 m.lods.clear();
             }
+            Ok(Vec::new())
         }
         Some(o) => {
-            sinew_pipeline::lod::generate_mesh_lods(meshes, skeleton, o, &Default::default())
-                .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
+                meshes,
+                skeleton,
+                o,
+                &Default::default(),
+            )
+            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            Ok(times)
         }
     }
-    Ok(())
 }
 
 /// The compression options of `--no-compress`, `--tolerance`, `--error-distance`; `None` for plain

@@ -71,7 +71,12 @@ pub fn import(file_name: &str, data: &[u8]) {
     let format = sinew_import::Format::from_path(std::path::Path::new(file_name))
         .expect("fuzz target names a known extension");
     let resolve = |name: &str| companions.resolve(name);
-    let options = sinew_import::ImportOptions::default();
+    // Missing companions are warnings here (`--allow-missing`), so the fuzzer reaches every table
+    // past them; the error a missing companion gives otherwise names it like any other.
+    let options = sinew_import::ImportOptions {
+        allow_missing: true,
+        ..Default::default()
+    };
     match sinew_import::import_bytes(format, file_name, files[0], &resolve, &options) {
         Ok(scene) => {
             std::hint::black_box(scene);

@@ -9,7 +9,10 @@ report), with the GIL released while sinew works:
 - ``write_pc2(path, positions, fps)``, ``write_mdd(path, positions, fps)``: the cache writers;
 - ``bake_to(src, out, format="pc2", **options)`` -> dict: ``sinew bake`` (EXR, PC2, MDD, sidecar, OBJ);
 - ``verify(cache, against)`` -> dict, the report of ``sinew verify --json`` (``identical`` says it all);
-- ``map(rig, motion, **options)`` -> dict, the report of ``sinew map --json``.
+- ``map(rig, motion, **options)`` -> dict, the report of ``sinew map --json``;
+- ``load(path)`` -> :class:`Asset`: the file as numpy arrays (skeleton, clips, meshes, masks, game
+  data), with ``asset.sample(clip, times)`` -> ``(T, J, 4, 4)`` joint matrices and
+  ``asset.skin(clip, times)`` -> ``(T, V, 3)`` positions from sinew's runtime (``sinew.asset``).
 
 Options are the command line's, spelled with underscores: ``convert(src, out, lod="none",
 no_compress=True, anim=["walk.bvh", "run.bvh"])`` is ``sinew convert src -o out --lod none
@@ -31,6 +34,7 @@ import numpy as np
 
 from . import _sinew
 from ._sinew import InputError, SinewError, UsageError
+from .asset import Asset, Clip, Lod, Mask, Material, Mesh, Skeleton, load
 
 __all__ = [
     "SinewError",
@@ -47,6 +51,14 @@ __all__ = [
     "export",
     "preview",
     "run",
+    "load",
+    "Asset",
+    "Skeleton",
+    "Clip",
+    "Mesh",
+    "Lod",
+    "Material",
+    "Mask",
     "__version__",
 ]
 
@@ -102,9 +114,16 @@ def convert(src: Union[PathLike, Iterable[PathLike]], out: Optional[PathLike] = 
             out_dir: Optional[PathLike] = None, **options: Any) -> dict:
     """Converts one file to ``out`` (``.sinew``), or files and folders into ``out_dir``.
 
-    Returns the report of ``sinew convert --json``: ``inputs``, ``converted``, ``failed`` and
-    ``files`` (one entry per input with ``status``, ``error`` and what was written). A single input
-    that fails raises :class:`InputError`; in a batch (``out_dir``) failures are in the report.
+    Returns the report of ``sinew convert --json``: ``inputs``, ``converted``, ``reused``,
+    ``failed``, the warning summary (``warnings``, ``inputs_with_warnings``, ``warning_codes``),
+    ``files`` (one entry per input with ``status``, ``error``, ``warnings`` and what was written) and
+    ``skipped`` (what a folder walk passed over, with the reason). A single input that fails raises
+    :class:`InputError`; in a batch (``out_dir``) failures are in the report. The command line's
+    switches: ``strict=True`` fails an input with any warning (nothing written for it; the report
+    says ``failed``, also for a single input, as the command's exit code 1 does),
+    ``allow_missing=True`` converts a Half-Life model without its missing SMDs or companion files,
+    ``incremental=True`` keeps outputs whose files, options and sinew version are unchanged
+    (status ``reused``).
     """
     sources = [src] if isinstance(src, (str, os.PathLike)) else list(src)
     args = ["convert", *[os.fspath(s) for s in sources]]

@@ -4,18 +4,24 @@ cluster (``dask.distributed``), largest inputs first.
 Each task converts one file where its worker runs and writes its output atomically there (shared
 storage between the machines is the caller's, see docs/scale.md). A failing file fails its own entry
 only. The result has one entry per input, in input order, with the fields of the command line's batch
-report (``input``, ``output``, ``status``, ``error`` and, when converted, what was written); the
-bytes are those a local ``sinew convert`` writes for the same options.
+report (``input``, ``output``, ``status``, ``error``, ``warnings`` and, when converted or reused, what
+was written); the bytes are those a local ``sinew convert`` writes for the same options. The
+command line's switches work the same: ``strict=True`` fails an input with a warning (nothing written
+for it), ``allow_missing=True`` converts Half-Life models without their missing files, and
+``incremental=True`` keeps the outputs whose files and options are unchanged (status ``reused``; one
+record per output under ``out_dir/.sinew-incremental/``, so tasks never share a record file).
+:func:`summary` gives the batch report's summary fields over the entries.
 """
 
 from __future__ import annotations
 
 import os
+import uuid
 from typing import Any, Iterable, List, Optional
 
 from . import _options, _sinew
 
-__all__ = ["convert_many", "plan"]
+__all__ = ["convert_many", "plan", "summary"]
 
 
 def plan(paths: Iterable[Any], out_dir: Any) -> List[tuple]:
@@ -51,11 +57,12 @@ def _convert_task(src: str, out: str, args: List[str]) -> dict:
         except FileExistsError:
             pass
     code, report, error, _ = _sinew.run(["convert", src, "-o", out, *args])
-    if code == 0 and report:
+    if code in (0, 1) and report:
+        # 1: failed by --strict, with its entry (status, error, warnings, diagnostics).
         import json
 
         return json.loads(report)["files"][0]
-    return {"input": src, "output": out, "status": "failed", "error": error or "failed"}
+    return {"input": src, "output": out, "status": "failed", "error": error or "failed", "warnings": 0}
 
 
 def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = None,
@@ -86,9 +93,13 @@ def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = Non
 
         order = sorted(range(len(pairs)), key=lambda i: (-size(pairs[i][0]), i))
         futures = {}
+        # Keys unique to this call: a key the cluster still holds from an earlier call would hand
+        # back that call's result instead of running the task.
+        call = uuid.uuid4().hex[:12]
         for i in order:
             src, out = pairs[i]
-            futures[i] = client.submit(_convert_task, src, out, args, key=f"sinew-convert-{i}-{os.path.basename(src)}",
+            futures[i] = client.submit(_convert_task, src, out, args,
+                                       key=f"sinew-convert-{call}-{i}-{os.path.basename(src)}",
                                        pure=False, retries=retries)
         if progress:
             from dask.distributed import progress as show_progress
@@ -103,7 +114,7 @@ def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = Non
             else:
                 src, out = pairs[i]
                 gathered[i] = {"input": src, "output": out, "status": "failed",
-                               "error": f"{src}: the task failed on the cluster ({f.status})"}
+                               "error": f"{src}: the task failed on the cluster ({f.status})", "warnings": 0}
         del results
         return [gathered[i] for i in range(len(pairs))]
     finally:
@@ -111,3 +122,25 @@ def convert_many(paths: Iterable[Any], out_dir: Any, client: Optional[Any] = Non
             client.close()
             if cluster is not None:
                 cluster.close()
+
+
+def summary(entries: Iterable[dict]) -> dict:
+    """The summary fields of ``sinew convert --json`` (``inputs``, ``converted``, ``reused``,
+    ``failed``, ``warnings``, ``inputs_with_warnings``, ``warning_codes``) over the entries
+    :func:`convert_many` returned, counted as the command line counts them."""
+    entries = list(entries)
+    codes: dict = {}
+    for e in entries:
+        for d in e.get("diagnostics", []):
+            if d.get("level") == "warning":
+                codes[d["code"]] = codes.get(d["code"], 0) + 1
+    count = lambda status: sum(1 for e in entries if e["status"] == status)  # noqa: E731
+    return {
+        "inputs": len(entries),
+        "converted": count("converted"),
+        "reused": count("reused"),
+        "failed": count("failed"),
+        "warnings": sum(e.get("warnings", 0) for e in entries),
+        "inputs_with_warnings": sum(1 for e in entries if e.get("warnings", 0) > 0),
+        "warning_codes": dict(sorted(codes.items())),
+    }

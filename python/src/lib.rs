@@ -1,34 +1,18 @@
 //! `sinew._sinew`, the extension module of the `sinew` Python package: the command line's functions
 //! (through `sinew_cli::run_captured`, so options, checks, outputs and reports are the CLI's own), an
-//! in-memory bake, and the PC2/MDD cache writers. The GIL is released while sinew works. The Python
-//! package (`python/sinew/`) turns arguments and results into Python data.
+//! in-memory bake, the PC2/MDD cache writers, and a decoded asset as numpy arrays that samples and
+//! skins into numpy buffers ([`asset`]). The GIL is released while sinew works. The Python package
+//! (`python/sinew/`) turns arguments and results into Python data.
 
-use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+mod asset;
+mod errors;
+
+use errors::{InputError, SinewError, UsageError};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use sinew_core::glam::Vec3;
 use sinew_pipeline::bake::{BakeRequest, VertexOrder};
 use sinew_pipeline::cache::Frames;
-
-create_exception!(
-    _sinew,
-    SinewError,
-    PyException,
-    "An error from sinew; `args[0]` is its one-line message (FILE: section at offset: problem)."
-);
-create_exception!(
-    _sinew,
-    InputError,
-    SinewError,
-    "Bad input: a missing, unreadable or corrupt file (the CLI's exit code 2)."
-);
-create_exception!(
-    _sinew,
-    UsageError,
-    SinewError,
-    "Bad arguments: an unknown option or a value out of range (the CLI's exit code 2)."
-);
 
 /// Runs a `sinew` command (arguments without the program name) as the binary would with `--json`:
 /// returns `(exit code, JSON report or None, one-line error or None, whether the arguments were
@@ -140,6 +124,7 @@ fn _sinew(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add_function(wrap_pyfunction!(bake, m)?)?;
     m.add_function(wrap_pyfunction!(write_cache, m)?)?;
+    asset::register(m)?;
     m.add("SinewError", m.py().get_type::<SinewError>())?;
     m.add("InputError", m.py().get_type::<InputError>())?;
     m.add("UsageError", m.py().get_type::<UsageError>())?;

@@ -1,6 +1,7 @@
 """The Python functions give what the command line gives: same reports, same bytes, same errors."""
 
 import json
+import pathlib
 import subprocess
 import threading
 import time
@@ -136,3 +137,33 @@ def test_the_gil_is_released_while_sinew_works(corpus_dir, tmp_path):
     t.join()
     # Python code kept running during the conversion (it takes tens of milliseconds at least).
     assert len(ticks) >= 5
+
+
+def test_convert_takes_strict_incremental_and_allow_missing(corpus_dir, tmp_path):
+    import shutil
+
+    folder = tmp_path / "models"
+    folder.mkdir()
+    # cube_mtllib_after_g.obj has warnings (its material library is not there), triangle.smd none.
+    for rel in ["obj/cube_mtllib_after_g.obj", "smd/triangle.smd", "mdl/manT.mdl"]:
+        shutil.copy(corpus_dir / rel, folder / pathlib.Path(rel).name)
+    report = sinew.convert(folder, out_dir=tmp_path / "out", strict=True, lod="none")
+    statuses = {pathlib.Path(f["input"]).name: f["status"] for f in report["files"]}
+    assert statuses == {"cube_mtllib_after_g.obj": "failed", "triangle.smd": "converted"}
+    assert report["strict"] is True and report["orphans"] == 1
+    assert {pathlib.Path(s["file"]).name: s["reason"] for s in report["skipped"]} == {"manT.mdl": "orphaned-companion"}
+    # A single input failed by --strict: the report says so (the command's exit code 1).
+    one = sinew.convert(folder / "cube_mtllib_after_g.obj", tmp_path / "one.sinew", strict=True)
+    assert one["failed"] == 1 and "--strict" in one["files"][0]["error"]
+    assert not (tmp_path / "one.sinew").exists()
+    first = sinew.convert(folder / "triangle.smd", tmp_path / "c.sinew", incremental=True)
+    again = sinew.convert(folder / "triangle.smd", tmp_path / "c.sinew", incremental=True)
+    assert (first["converted"], again["reused"]) == (1, 1)
+    assert again["incremental"]["state"] == "used"
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    shutil.copy(corpus_dir / "mdl/man.mdl", alone / "man.mdl")
+    with pytest.raises(sinew.InputError) as e:
+        sinew.convert(alone / "man.mdl", tmp_path / "m.sinew")
+    assert "man.mdl: textures at byte 180" in str(e.value) and "manT.mdl" in str(e.value)
+    assert sinew.convert(alone / "man.mdl", tmp_path / "m.sinew", allow_missing=True)["converted"] == 1

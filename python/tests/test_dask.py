@@ -68,3 +68,45 @@ def test_convert_many_matches_the_command_line_batch(client, corpus_dir, sinew_b
 def test_plan_names_outputs_as_the_command_line_does(tmp_path):
     pairs = plan(["a/x.glb", "b/x.obj", "c/y.ms3d"], tmp_path)
     assert [os.path.basename(o) for _, o in pairs] == ["x.glb.sinew", "x.obj.sinew", "y.sinew"]
+
+
+def test_convert_many_takes_the_command_lines_switches_and_reports_the_same(client, corpus_dir, sinew_bin, tmp_path):
+    import json
+    import shutil
+
+    from sinew.dask import summary
+
+    c, _ = client
+    # cube_mtllib_after_g.obj has warnings (its material library is not there); the others none.
+    files = [corpus_dir / "obj/cube_mtllib_after_g.obj", corpus_dir / "smd/holy_grailref.smd",
+             corpus_dir / "smd/triangle.smd"]
+    strict = convert_many(files, tmp_path / "strict", client=c, strict=True, lod="none")
+    r = subprocess.run([str(sinew_bin), "--json", "convert", *map(str, files), "--out-dir", str(tmp_path / "cli"),
+                        "--strict", "--lod", "none"], capture_output=True, text=True)
+    assert r.returncode == 1
+    cli = json.loads(r.stdout)
+    assert [e["status"] for e in strict] == ["failed", "converted", "converted"]
+    assert [e["status"] for e in strict] == [e["status"] for e in cli["files"]]
+    assert strict[0]["error"] == cli["files"][0]["error"] and "--strict" in strict[0]["error"]
+    assert strict[0]["warnings"] == cli["files"][0]["warnings"] > 0
+    assert not (tmp_path / "strict" / "cube_mtllib_after_g.sinew").exists()
+    assert summary(strict) == {k: cli[k] for k in summary(strict)}
+
+    # incremental: the second run reuses every output, the same entries but the status.
+    first = convert_many(files, tmp_path / "inc", client=c, incremental=True, lod="none")
+    again = convert_many(files, tmp_path / "inc", client=c, incremental=True, lod="none")
+    assert [e["status"] for e in first] == ["converted"] * 3
+    assert [e["status"] for e in again] == ["reused"] * 3
+    for a, b in zip(first, again):
+        assert {k: v for k, v in a.items() if k != "status"} == {k: v for k, v in b.items() if k != "status"}
+    assert (tmp_path / "inc" / ".sinew-incremental" / "triangle.sinew.json").is_file()
+
+    # allow_missing: man.mdl without its texture file fails, and converts when allowed.
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    shutil.copy(corpus_dir / "mdl/man.mdl", alone / "man.mdl")
+    [refused] = convert_many([alone / "man.mdl"], tmp_path / "hl", client=c)
+    assert refused["status"] == "failed" and "manT.mdl" in refused["error"]
+    [allowed] = convert_many([alone / "man.mdl"], tmp_path / "hl", client=c, allow_missing=True)
+    assert allowed["status"] == "converted"
+    assert [d["code"] for d in allowed["diagnostics"] if d["level"] == "warning"] == ["mdl-missing-textures"]

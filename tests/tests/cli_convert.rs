@@ -90,8 +90,22 @@ fn batch_over_corpus_converts_good_files_and_lists_every_bad_one() {
     for (input, f) in inputs.iter().zip(files) {
         assert_eq!(f["input"], input.display().to_string(), "order kept");
         let out = PathBuf::from(f["output"].as_str().unwrap());
-        // Does the importer accept the source? That, not the folder, decides what must convert.
+        // Does the importer accept the source, and does it hold anything (a joint, a mesh, a
+        // clip)? That, not the folder, decides what must convert.
         let src = sinew([Path::new("inspect"), Path::new("--json"), input]);
+        let empty = src.code == 0 && {
+            let v: Value = serde_json::from_str(&src.stdout).unwrap();
+            v["summary"]["joints"] == 0
+                && arr(&v["meshes"]).is_empty()
+                && arr(&v["clips"]).is_empty()
+        };
+        if empty {
+            assert_eq!(f["status"], "failed", "{}", input.display());
+            let err = f["error"].as_str().unwrap();
+            assert!(err.contains("nothing to convert"), "{err}");
+            assert!(!out.exists());
+            continue;
+        }
         if is_malformed(input) || src.code != 0 {
             assert_eq!(f["status"], "failed", "{}", input.display());
             let err = f["error"].as_str().unwrap();

@@ -6,17 +6,22 @@
 
 use crate::batch::{self, Job};
 use crate::cli::ConvertArgs;
+use crate::digest::Stamp;
+use crate::incremental;
 use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::report::{
-    clip_report, diag_report, mesh_report, num, ClipOut, ConvertReport, FileReport, MeshOut,
-    NotBuiltReport, OutputDetails,
+    clip_report, diag_report, mesh_report, num, strict_error, warning_pairs, ClipOut, ClipTiming,
+    ConvertReport, FileReport, IncrementalReport, MeshOut, MeshTimings, NotBuiltReport,
+    OutputDetails, Timings,
 };
 use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
 use crate::Status;
 use anyhow::{anyhow, bail};
 use sinew_core::Skeleton;
-use sinew_pipeline::compile::{compile_compressed, compress_clips, CompileReport, CompressedClips};
+use sinew_pipeline::compile::{
+    compile_compressed, compress_clips_timed, CompileReport, CompressedClips,
+};
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
@@ -74,6 +79,7 @@ pub fn details(
         splits,
         diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
         textures: Vec::new(),
+        timings: None,
     }
 }
 
@@ -110,19 +116,19 @@ pub fn write_scene(
     compress: Option<&CompressOptions>,
 ) -> anyhow::Result<Written> {
     let compressed = compress_scene_clips(&scene.clips, scene.skeleton.as_ref(), input, compress)?;
-    write_compressed(scene, input, output, compressed)
+    write_compressed(scene, input, output, compressed.map(|c| c.0))
 }
 
 /// The clip half of [`write_scene`]: a scene's clips compiled and compressed (`None` without
-/// compression); `skeleton` is the scene's.
+/// compression), with each clip's encoding time in seconds; `skeleton` is the scene's.
 fn compress_scene_clips(
     clips: &[SceneClip],
     skeleton: Option<&Skeleton>,
     input: &str,
     compress: Option<&CompressOptions>,
-) -> anyhow::Result<Option<CompressedClips>> {
+) -> anyhow::Result<Option<(CompressedClips, Vec<f64>)>> {
     compress
-        .map(|o| compress_clips(clips, skeleton, o))
+        .map(|o| compress_clips_timed(clips, skeleton, o))
         .transpose()
         .map_err(|e| anyhow!("{input}: compiling: {e}"))
 }
@@ -134,14 +140,24 @@ fn write_compressed(
     output: &Path,
     compressed: Option<CompressedClips>,
 ) -> anyhow::Result<Written> {
-    let (asset, report) =
-        compile_compressed(scene, compressed).map_err(|e| anyhow!("{input}: compiling: {e}"))?;
-    let bytes = sinew_core::format::write(&asset).map_err(|e| anyhow!("{input}: writing: {e}"))?;
+    let (bytes, report) = compile_bytes(scene, input, compressed)?;
     write_atomic(output, &bytes)?;
     Ok(Written {
         bytes: bytes.len() as u64,
         report,
     })
+}
+
+/// The `.sinew` bytes of a scene, with the clips [`compress_scene_clips`] gave for it.
+fn compile_bytes(
+    scene: &Scene,
+    input: &str,
+    compressed: Option<CompressedClips>,
+) -> anyhow::Result<(Vec<u8>, CompileReport)> {
+    let (asset, report) =
+        compile_compressed(scene, compressed).map_err(|e| anyhow!("{input}: compiling: {e}"))?;
+    let bytes = sinew_core::format::write(&asset).map_err(|e| anyhow!("{input}: writing: {e}"))?;
+    Ok((bytes, report))
 }
 
 /// Everything prepared once for all inputs.
@@ -155,15 +171,52 @@ struct Plan {
     lod: Option<LodOptions>,
     compress: Option<CompressOptions>,
     textures: bool,
+    /// `--strict`: an input with a warning fails and writes nothing.
+    strict: bool,
+    /// `--timings`: each step's wall time goes into the report.
+    timings: bool,
+    /// `--incremental`: the records and where they go.
+    record: Option<RecordPlan>,
 }
 
-fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
+/// The incremental record of a run: its folder (the output folder), the options' fingerprint, and
+/// per job the record found.
+struct RecordPlan {
+    root: std::path::PathBuf,
+    options: String,
+    loaded: incremental::Loaded,
+}
+
+/// A converted input, not yet written: its report and its files (texture PNGs, then the `.sinew`),
+/// and the wall times of its steps (the import and writing are added by [`run_job`]).
+struct Built {
+    details: OutputDetails,
+    files: Vec<(std::path::PathBuf, Vec<u8>)>,
+    timings: Timings,
+}
+
+/// Milliseconds since `start`.
+fn ms_since(start: std::time::Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1000.0
+}
+
+/// What became of one input.
+enum Outcome {
+    /// Written.
+    Converted(OutputDetails),
+    /// Kept from an earlier run (its record).
+    Reused(Box<incremental::Record>),
+    /// Converted but not written: `--strict` and a warning (the error line).
+    Strict(OutputDetails, String),
+    /// Failed.
+    Failed(anyhow::Error),
+}
+
+fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built> {
     let (input, output) = (&job.input, &job.output);
     let label = input.display().to_string();
-    let mut scene = match job.format {
-        Some(format) => crate::input::import_as(input, format, &plan.import)?,
-        None => crate::input::import(input, &plan.import)?,
-    };
+    steps::check_not_empty(&scene, &label)?;
+    let prepared = std::time::Instant::now();
     let cuts = match &plan.clips {
         Some(spec) => steps::cut(&mut scene, spec, &label)?,
         None => Vec::new(),
@@ -180,6 +233,7 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
         )?);
     }
     let splits = steps::split(&mut scene, &plan.split, &label)?;
+    let prepare_ms = ms_since(prepared);
     // LODs (meshes) and clip compression (clips) read and write different parts of the scene and
     // are the two costly steps: they run at the same time. Each gives what it gives alone; a LOD
     // error is reported first, as when they ran in turn.
@@ -201,31 +255,186 @@ fn convert_one(job: &Job, plan: &Plan) -> anyhow::Result<OutputDetails> {
             )
         },
     );
-    lods?;
-    let compressed = compressed?;
-    if let Some(dir) = output.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| anyhow!("{}: cannot create the folder: {e}", dir.display()))?;
-    }
+    let lod_times = lods?;
+    let (compressed, encode_seconds) = match compressed? {
+        Some((c, s)) => (Some(c), s),
+        None => (None, Vec::new()),
+    };
+    let texturing = std::time::Instant::now();
     // Textures first: a written .sinew always has its textures beside it.
-    let mut textures = Vec::new();
+    let mut files = Vec::new();
     if plan.textures && !scene.images.is_empty() {
         let stem = output
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let files = sinew_pipeline::texture::textures_for_output(&mut scene, &stem)
+        let textures = sinew_pipeline::texture::textures_for_output(&mut scene, &stem)
             .map_err(|e| anyhow!("{label}: {e}"))?;
-        for (name, bytes) in files {
-            let path = output.with_file_name(&name);
-            write_atomic(&path, &bytes)?;
-            textures.push(path.display().to_string());
+        for (name, bytes) in textures {
+            files.push((output.with_file_name(&name), bytes));
         }
     }
-    let written = write_compressed(&scene, &label, output, compressed)?;
+    let textures_ms = ms_since(texturing);
+    let compiling = std::time::Instant::now();
+    let (bytes, report) = compile_bytes(&scene, &label, compressed)?;
+    let write_ms = ms_since(compiling);
+    let written = Written {
+        bytes: bytes.len() as u64,
+        report,
+    };
     let mut d = details(&scene, written, motions, cuts, splits);
-    d.textures = textures;
-    Ok(d)
+    d.textures = files.iter().map(|(p, _)| p.display().to_string()).collect();
+    files.push((output.clone(), bytes));
+    let timings = Timings {
+        prepare_ms,
+        lods: scene
+            .meshes
+            .iter()
+            .zip(lod_times)
+            .map(|(m, t)| MeshTimings {
+                mesh: m.name.clone(),
+                optimize_ms: t.optimize * 1000.0,
+                levels_ms: t.levels.iter().map(|s| s * 1000.0).collect(),
+            })
+            .collect(),
+        clips: scene
+            .clips
+            .iter()
+            .zip(encode_seconds)
+            .map(|(c, s)| ClipTiming {
+                clip: c.name.clone(),
+                encode_ms: s * 1000.0,
+            })
+            .collect(),
+        textures_ms,
+        write_ms,
+        ..Timings::default()
+    };
+    Ok(Built {
+        details: d,
+        files,
+        timings,
+    })
+}
+
+/// Converts job `i`, or keeps its output when its record still holds; with `--strict` a warning
+/// fails it before anything is written. Returns what became of it and the files it read (or read
+/// last time, when kept).
+fn run_job(i: usize, job: &Job, plan: &Plan) -> (Outcome, Vec<Stamp>) {
+    if let Some(r) = &plan.record {
+        let record = r.loaded.records.get(i).and_then(Option::as_ref);
+        if let Some(rec) = record.filter(|x| x.still_holds(&r.options, &job.input, &job.output)) {
+            let reads = rec.reads.clone();
+            return (Outcome::Reused(Box::new(rec.clone())), reads);
+        }
+    }
+    let started = std::time::Instant::now();
+    let (scene, reads) =
+        crate::input::import_tracked(&job.input, job.format, &plan.import, plan.record.is_some());
+    let import_ms = ms_since(started);
+    let mut built = match scene.and_then(|scene| convert_one(job, plan, scene)) {
+        Ok(b) => b,
+        Err(e) => return (Outcome::Failed(e), reads),
+    };
+    let warnings = warning_pairs(&built.details);
+    if plan.strict && !warnings.is_empty() {
+        let line = strict_error(&job.input.display().to_string(), &warnings);
+        return (Outcome::Strict(built.details, line), reads);
+    }
+    let writing = std::time::Instant::now();
+    let written = write_built(job, plan, &built, &reads, warnings.len());
+    // Timings go into the report after the incremental record was written: they are not part of
+    // what a reused output reports.
+    if plan.timings {
+        let mut t = std::mem::take(&mut built.timings);
+        t.import_ms = import_ms;
+        t.write_ms += ms_since(writing);
+        t.total_ms = ms_since(started);
+        built.details.timings = Some(t);
+    }
+    match written {
+        Ok(()) => (Outcome::Converted(built.details), reads),
+        Err(e) => (Outcome::Failed(e), reads),
+    }
+}
+
+/// Writes a built input's files (each atomically, the `.sinew` last) and, with `--incremental`, its
+/// record.
+fn write_built(
+    job: &Job,
+    plan: &Plan,
+    built: &Built,
+    reads: &[Stamp],
+    warnings: usize,
+) -> anyhow::Result<()> {
+    if let Some(dir) = job.output.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| anyhow!("{}: cannot create the folder: {e}", dir.display()))?;
+    }
+    for (path, bytes) in &built.files {
+        write_atomic(path, bytes)?;
+    }
+    let Some(r) = &plan.record else {
+        return Ok(());
+    };
+    // As text, as the JSON report prints it (an f32 as its shortest digits).
+    let report = serde_json::to_string(&built.details).map_err(|e| {
+        anyhow!(
+            "{}: encoding the incremental record: {e}",
+            job.output.display()
+        )
+    })?;
+    let writes = built
+        .files
+        .iter()
+        .map(|(p, b)| Stamp::of(p, Some(b)))
+        .collect();
+    let record = incremental::Record::new(
+        &r.options,
+        (&job.input, &job.output),
+        reads.to_vec(),
+        writes,
+        warnings,
+        report,
+    );
+    incremental::store(&r.root, &record)
+}
+
+/// The report entry of one input.
+fn file_report(job: &Job, outcome: Outcome, strict: bool) -> FileReport {
+    let mut f = FileReport {
+        input: job.input.display().to_string(),
+        output: job.output.display().to_string(),
+        status: "converted",
+        error: None,
+        warnings: 0,
+        details: None,
+        recorded: None,
+    };
+    match outcome {
+        Outcome::Converted(d) => f.details = Some(d),
+        Outcome::Strict(d, line) => {
+            f.status = "failed";
+            f.error = Some(line);
+            f.details = Some(d);
+        }
+        Outcome::Reused(rec) => {
+            f.status = "reused";
+            f.recorded = rec.report_fields();
+        }
+        Outcome::Failed(e) => {
+            f.status = "failed";
+            f.error = Some(crate::output::one_line(&e));
+        }
+    }
+    let list = f.warning_list();
+    f.warnings = list.len();
+    // A kept output with warnings fails under --strict like a converted one (nothing is written).
+    if strict && f.status == "reused" && !list.is_empty() {
+        f.status = "failed";
+        f.error = Some(strict_error(&f.input, &list));
+    }
+    f
 }
 
 /// Runs `sinew convert`.
@@ -251,7 +460,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
             bail!("--root-scale: {k} is not usable: it must be a finite number above 0");
         }
     }
-    let jobs: Vec<Job> = match (&args.output, &args.out_dir) {
+    let (jobs, passed) = match (&args.output, &args.out_dir) {
         (Some(o), None) => {
             if args.inputs.len() != 1 {
                 bail!(
@@ -266,31 +475,57 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
                 );
             }
             check_output_path(o)?;
-            vec![Job {
+            let job = Job {
                 input: args.inputs[0].clone(),
                 output: o.clone(),
                 format: None,
-            }]
+            };
+            (vec![job], Vec::new())
         }
         (None, Some(dir)) => {
             if dir.exists() && !dir.is_dir() {
                 bail!("{}: --out-dir is a file, not a folder", dir.display());
             }
-            let jobs = batch::plan(&args.inputs, dir, &args.import)?;
+            let batch = batch::plan(&args.inputs, dir, &args.import)?;
             std::fs::create_dir_all(dir)
                 .map_err(|e| anyhow!("{}: cannot create the output folder: {e}", dir.display()))?;
-            jobs
+            (batch.jobs, batch.passed)
         }
         _ => bail!("convert: give -o OUT.sinew (one input) or --out-dir DIR"),
     };
     let map = args.map.as_deref().map(MappingFile::read).transpose()?;
+    // What the --anim and --map files hold is part of the incremental record's fingerprint.
+    let mut extra = Vec::new();
     let mut anims = Vec::with_capacity(args.anim.len());
     for a in &args.anim {
-        anims.push((
-            a.display().to_string(),
-            crate::input::import(a, &args.import)?,
-        ));
+        let (scene, reads) = crate::input::import_tracked(a, None, &args.import, args.incremental);
+        anims.push((a.display().to_string(), scene?));
+        extra.extend(reads);
     }
+    if let Some(m) = &map {
+        extra.push(Stamp::of(Path::new(&m.path), Some(m.text.as_bytes())));
+    }
+    let record = args.incremental.then(|| {
+        let root = match (&args.out_dir, &args.output) {
+            (Some(dir), _) => dir.clone(),
+            (None, Some(o)) => o
+                .parent()
+                .filter(|p| !p.as_os_str().is_empty())
+                .map_or_else(|| Path::new(".").to_path_buf(), Path::to_path_buf),
+            (None, None) => Path::new(".").to_path_buf(),
+        };
+        let outputs: Vec<&Path> = jobs.iter().map(|j| j.output.as_path()).collect();
+        RecordPlan {
+            options: incremental::options_fingerprint(args, &extra),
+            loaded: incremental::load(&root, &outputs),
+            root,
+        }
+    });
+    let incremental_report = record.as_ref().map(|r| IncrementalReport {
+        record: r.root.join(incremental::FOLDER).display().to_string(),
+        state: r.loaded.state,
+        reason: r.loaded.reason.clone(),
+    });
     let plan = Plan {
         import: args.import.clone(),
         anims,
@@ -303,27 +538,22 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         lod,
         compress,
         textures: !args.no_textures,
+        strict: args.strict,
+        timings: args.timings,
+        record,
     };
 
-    // One input with -o: an error is the command's error (exit 2, one line).
+    // One input with -o: an error is the command's error (exit 2, one line); a failure by
+    // --strict is a failed check (exit 1) with its report.
     if args.output.is_some() {
         let job = &jobs[0];
-        let d = convert_one(job, &plan)?;
-        let file = FileReport {
-            input: job.input.display().to_string(),
-            output: job.output.display().to_string(),
-            status: "converted",
-            error: None,
-            details: Some(d),
+        let file = match run_job(0, job, &plan).0 {
+            Outcome::Failed(e) => return Err(e),
+            outcome => file_report(job, outcome, plan.strict),
         };
-        let report = ConvertReport {
-            inputs: 1,
-            converted: 1,
-            failed: 0,
-            files: vec![file],
-        };
+        let report = ConvertReport::new(vec![file], Vec::new(), plan.strict, incremental_report);
         emit(&report, ctx)?;
-        return Ok(Status::Success);
+        return Ok(finish(&report, ctx));
     }
 
     // Batch.
@@ -347,8 +577,8 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     // long file starts early instead of serialising the end of the batch. Reports keep input order.
     let order = largest_first(&jobs);
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let slots: Vec<std::sync::Mutex<Option<FileReport>>> =
-        jobs.iter().map(|_| std::sync::Mutex::new(None)).collect();
+    type Slot = std::sync::Mutex<Option<(FileReport, Vec<std::path::PathBuf>)>>;
+    let slots: Vec<Slot> = jobs.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let workers = pool.current_num_threads().min(jobs.len()).max(1);
     pool.scope(|scope| {
         for _ in 0..workers {
@@ -358,74 +588,71 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
                     break;
                 };
                 let job = &jobs[i];
-                let result = convert_one(job, &plan);
+                let (outcome, reads) = run_job(i, job, &plan);
                 if let Some(b) = &bar {
                     b.inc(1);
                 }
-                let (status, error, details) = match result {
-                    Ok(d) => ("converted", None, Some(d)),
-                    Err(e) => ("failed", Some(crate::output::one_line(&e)), None),
-                };
-                let report = FileReport {
-                    input: job.input.display().to_string(),
-                    output: job.output.display().to_string(),
-                    status,
-                    error,
-                    details,
-                };
+                let report = file_report(job, outcome, plan.strict);
+                let reads = reads.iter().map(|s| s.path.clone().into()).collect();
                 if let Ok(mut slot) = slots[i].lock() {
-                    *slot = Some(report);
+                    *slot = Some((report, reads));
                 }
             });
         }
     });
-    let files: Vec<FileReport> = slots
+    let (files, reads): (Vec<FileReport>, Vec<Vec<std::path::PathBuf>>) = slots
         .into_iter()
         .zip(&jobs)
         .map(|(slot, job)| {
-            slot.into_inner()
-                .ok()
-                .flatten()
-                .unwrap_or_else(|| FileReport {
-                    input: job.input.display().to_string(),
-                    output: job.output.display().to_string(),
-                    status: "failed",
-                    error: Some(format!(
-                        "{}: the worker converting it stopped",
-                        job.input.display()
-                    )),
-                    details: None,
-                })
+            slot.into_inner().ok().flatten().unwrap_or_else(|| {
+                let e = anyhow!("{}: the worker converting it stopped", job.input.display());
+                (file_report(job, Outcome::Failed(e), false), Vec::new())
+            })
         })
-        .collect();
+        .unzip();
     if let Some(b) = bar {
         b.finish_and_clear();
     }
-    let failed = files.iter().filter(|f| f.error.is_some()).count();
-    let report = ConvertReport {
-        inputs: files.len(),
-        converted: files.len() - failed,
-        failed,
-        files,
-    };
+    let skipped = batch::skipped(&passed, &jobs, &reads);
+    let report = ConvertReport::new(files, skipped, plan.strict, incremental_report);
     emit(&report, ctx)?;
-    // Failures are errors: listed on stderr even with --quiet or --json (not when a library caller
-    // collects the report: they are in it).
-    for f in &report.files {
-        if let (Some(e), true) = (&f.error, ctx.stderr()) {
-            eprintln!("sinew: error: {e}");
+    Ok(finish(&report, ctx))
+}
+
+/// Lists the failures and orphaned companions on stderr (also with --quiet or --json, not when a
+/// library caller collects the report: they are in it) and gives the exit status: 1 when any.
+fn finish(report: &ConvertReport, ctx: &Ctx) -> Status {
+    if ctx.stderr() {
+        for f in &report.files {
+            if let Some(e) = &f.error {
+                eprintln!("sinew: error: {e}");
+            }
+        }
+        for s in report
+            .skipped
+            .iter()
+            .filter(|s| s.reason == "orphaned-companion")
+        {
+            eprintln!("sinew: error: {}: {}", s.file, s.message);
         }
     }
-    if failed > 0 {
-        if !ctx.quiet && ctx.stderr() {
-            eprintln!(
-                "sinew: {failed} of {} files failed; {} converted",
-                report.inputs, report.converted
-            );
-        }
-        return Ok(Status::CheckFailed);
+    if report.failed == 0 && report.orphans == 0 {
+        return Status::Success;
     }
-    Ok(Status::Success)
+    if !ctx.quiet && ctx.stderr() && (report.inputs > 1 || report.orphans > 0) {
+        eprintln!(
+            "sinew: {} of {} files failed; {} converted, {} reused{}",
+            report.failed,
+            report.inputs,
+            report.converted,
+            report.reused,
+            match report.orphans {
+                0 => String::new(),
+                n => format!("; {n} companion files without their model"),
+            }
+        );
+    }
+    Status::CheckFailed
 }
 
 /// Job indices, largest input file first (ties keep input order): the longest-processing-time-first
@@ -442,13 +669,63 @@ fn emit(report: &ConvertReport, ctx: &Ctx) -> anyhow::Result<()> {
     if ctx.json {
         ctx.emit_json(report)?;
     } else if ctx.human() {
+        if let Some(r) = report.incremental.as_ref().and_then(|i| i.reason.as_ref()) {
+            eprintln!("sinew: incremental record ignored: {r}");
+        }
         for f in &report.files {
-            if let Some(d) = &f.details {
+            if f.status == "failed" {
+                // Errors are listed by `finish`; a failure by --strict also shows its warnings.
+                for (code, message) in f.warning_list().iter().filter(|_| f.details.is_some()) {
+                    eprintln!(
+                        "{}: not written (--strict): warning [{code}] {message}",
+                        f.input
+                    );
+                }
+            } else if let Some(d) = &f.details {
                 eprint!("{}", human_details(&f.input, &f.output, d));
+            } else if f.status == "reused" {
+                eprintln!(
+                    "{} -> {}: reused (its files, the options and sinew are unchanged), {} warnings",
+                    f.input, f.output, f.warnings
+                );
             }
         }
+        eprint!("{}", human_summary(report));
     }
     Ok(())
+}
+
+/// The batch lines of the human report: the files a folder walk passed over (companions and files
+/// that are not models counted, orphans listed as errors by [`finish`]) and the warnings.
+fn human_summary(report: &ConvertReport) -> String {
+    let mut o = String::new();
+    let count = |r: &str| report.skipped.iter().filter(|s| s.reason == r).count();
+    if !report.skipped.is_empty() {
+        let _ = writeln!(
+            o,
+            "skipped {} files: {} companions read by their model, {} not models, {} orphaned companions (--json lists each)",
+            report.skipped.len(),
+            count("companion"),
+            count("not-a-model"),
+            report.orphans
+        );
+    }
+    if report.inputs > 1 && report.warnings > 0 {
+        let codes: Vec<String> = report
+            .warning_codes
+            .iter()
+            .map(|(c, n)| format!("{c} x{n}"))
+            .collect();
+        let _ = writeln!(
+            o,
+            "{} warnings in {} of {} inputs: {}",
+            report.warnings,
+            report.inputs_with_warnings,
+            report.inputs,
+            codes.join(", ")
+        );
+    }
+    o
 }
 
 /// Prints the report of a command that writes one output (`split`, `lod`): a [`FileReport`] as JSON,
@@ -459,7 +736,9 @@ pub fn emit_one(input: &str, output: &Path, d: OutputDetails, ctx: &Ctx) -> anyh
         output: output.display().to_string(),
         status: "converted",
         error: None,
+        warnings: warning_pairs(&d).len(),
         details: Some(d),
+        recorded: None,
     };
     if ctx.json {
         ctx.emit_json(&f)?;
@@ -592,6 +871,43 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         if diag.level == "warning" {
             let _ = writeln!(o, "  warning [{}] {}", diag.code, diag.message);
         }
+    }
+    if let Some(t) = &d.timings {
+        o.push_str(&human_timings(t));
+    }
+    o
+}
+
+/// The `--timings` lines of the human summary.
+fn human_timings(t: &Timings) -> String {
+    let ms = |x: f64| format!("{x:.1} ms");
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "  timings: total {}, import {}, prepare {}, textures {}, write {}",
+        ms(t.total_ms),
+        ms(t.import_ms),
+        ms(t.prepare_ms),
+        ms(t.textures_ms),
+        ms(t.write_ms)
+    );
+    for m in &t.lods {
+        let levels: Vec<String> = m
+            .levels_ms
+            .iter()
+            .enumerate()
+            .map(|(k, &x)| format!("LOD {} {}", k + 1, ms(x)))
+            .collect();
+        let _ = writeln!(
+            o,
+            "    mesh \"{}\": optimize {}, {}",
+            m.mesh,
+            ms(m.optimize_ms),
+            levels.join(", ")
+        );
+    }
+    for c in &t.clips {
+        let _ = writeln!(o, "    clip \"{}\": encode {}", c.clip, ms(c.encode_ms));
     }
     o
 }

@@ -185,7 +185,9 @@ pub(super) fn skeleton_report(s: &Skeleton) -> SkeletonReport {
 /// The report of one clip: timing, key counts, tracks and (with a skeleton) which joints it drives.
 pub fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> ClipReport {
     let mut keys = KeyCounts::default();
-    let mut times: Vec<f32> = Vec::new();
+    // Channels usually share their key times: each distinct list is added once, so the count of
+    // distinct times costs a sort of what is distinct, not of every channel's keys.
+    let mut lists: Vec<&[f32]> = Vec::new();
     let mut tracks = Vec::with_capacity(c.tracks.len());
     let mut driven = Vec::new();
     for t in &c.tracks {
@@ -197,9 +199,11 @@ pub fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> C
         keys.translation += nt;
         keys.rotation += nr;
         keys.scale += ns;
-        times.extend_from_slice(&t.translation.times);
-        times.extend_from_slice(&t.rotation.times);
-        times.extend_from_slice(&t.scale.times);
+        for list in [&t.translation.times, &t.rotation.times, &t.scale.times] {
+            if !list.is_empty() && !lists.contains(&list.as_slice()) {
+                lists.push(list);
+            }
+        }
         if nt + nr + ns > 0 {
             driven.push(t.joint.clone());
         }
@@ -212,7 +216,8 @@ pub fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> C
         });
     }
     keys.total = keys.translation + keys.rotation + keys.scale;
-    times.sort_by(f32::total_cmp);
+    let mut times: Vec<f32> = lists.concat();
+    times.sort_unstable_by(f32::total_cmp);
     times.dedup();
     let unmatched = skeleton.map(|s| {
         driven

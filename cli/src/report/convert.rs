@@ -123,10 +123,52 @@ pub struct ConvertReport {
     pub inputs: usize,
     /// Outputs written.
     pub converted: usize,
+    /// Inputs whose outputs were kept from an earlier run (`--incremental`).
+    pub reused: usize,
     /// Inputs that failed.
     pub failed: usize,
+    /// Warnings over every input (converted, reused or failed by `--strict`).
+    pub warnings: usize,
+    /// Inputs with at least one warning.
+    pub inputs_with_warnings: usize,
+    /// Warnings by code, over every input.
+    pub warning_codes: std::collections::BTreeMap<String, usize>,
+    /// Whether `--strict` was given: any warning fails its input.
+    pub strict: bool,
+    /// Companion files whose model is missing (each fails the batch).
+    pub orphans: usize,
+    /// With `--incremental`: the record and what was made of it; `null` without.
+    pub incremental: Option<IncrementalReport>,
     /// One entry per input, in command-line order.
     pub files: Vec<FileReport>,
+    /// Every file a folder walk passed over without converting it, by path, with the reason.
+    pub skipped: Vec<SkippedReport>,
+}
+
+/// What `--incremental` made of the record it found.
+#[derive(Debug, Clone, Serialize)]
+pub struct IncrementalReport {
+    /// The record's folder (`OUT-DIR/.sinew-incremental`).
+    pub record: String,
+    /// `used` (records read and checked per input), `new` (no record yet: every input converted),
+    /// `ignored` (a record was corrupt or not sinew's: a full run).
+    pub state: &'static str,
+    /// Why the record was ignored; `null` otherwise.
+    pub reason: Option<String>,
+}
+
+/// A file a folder walk passed over.
+#[derive(Debug, Clone, Serialize)]
+pub struct SkippedReport {
+    /// The file.
+    pub file: String,
+    /// `not-a-model`, `companion` (read by `model`) or `orphaned-companion` (a Half-Life texture or
+    /// sequence-group file that no model reads; fails the batch).
+    pub reason: &'static str,
+    /// For `companion`: the input that reads it; else `null`.
+    pub model: Option<String>,
+    /// The reason in words.
+    pub message: String,
 }
 
 /// One input of a convert run.
@@ -136,13 +178,68 @@ pub struct FileReport {
     pub input: String,
     /// The output path.
     pub output: String,
-    /// `converted` or `failed`.
+    /// `converted`, `reused` (kept from an earlier run, `--incremental`) or `failed`.
     pub status: &'static str,
     /// The error (one line) when failed, else `null`.
     pub error: Option<String>,
-    /// What was written (absent when failed).
+    /// Warnings among the diagnostics (0 when the input failed before any).
+    pub warnings: usize,
+    /// What was written (absent when failed; present for a failure by `--strict`, which writes
+    /// nothing).
     #[serde(flatten)]
     pub details: Option<OutputDetails>,
+    /// For `reused`: the same fields as recorded when the output was written.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub recorded: Option<RecordedFields>,
+}
+
+/// The report fields recorded for a kept output, in their order, each exactly as the JSON text it
+/// was written as (so a number prints back digit for digit).
+#[derive(Debug)]
+pub struct RecordedFields(pub Vec<(String, Box<serde_json::value::RawValue>)>);
+
+impl Serialize for RecordedFields {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl RecordedFields {
+    /// The fields of a JSON object's text, in order; `None` when it is not an object.
+    pub fn parse(text: &str) -> Option<RecordedFields> {
+        struct Fields;
+        impl<'de> serde::de::Visitor<'de> for Fields {
+            type Value = RecordedFields;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a JSON object")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<RecordedFields, A::Error> {
+                let mut out = Vec::new();
+                while let Some(entry) = map.next_entry()? {
+                    out.push(entry);
+                }
+                Ok(RecordedFields(out))
+            }
+        }
+        let mut de = serde_json::Deserializer::from_str(text);
+        let fields = serde::Deserializer::deserialize_map(&mut de, Fields).ok()?;
+        de.end().ok()?;
+        Some(fields)
+    }
+
+    /// One field, decoded.
+    pub fn get(&self, key: &str) -> Option<serde_json::Value> {
+        let (_, raw) = self.0.iter().find(|(k, _)| k == key)?;
+        serde_json::from_str(raw.get()).ok()
+    }
 }
 
 /// What one written `.sinew` holds and how it was made.
@@ -168,6 +265,51 @@ pub struct OutputDetails {
     pub diagnostics: Vec<DiagnosticReport>,
     /// PNG files written beside the output for the textures the source carried (Half-Life).
     pub textures: Vec<String>,
+    /// Wall times of the steps (`convert --timings` only; absent otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub timings: Option<Timings>,
+}
+
+/// Wall times of one input's conversion, milliseconds (`convert --timings`). The LODs and the clip
+/// encoder run at the same time, and meshes and clips each in parallel, so these times overlap:
+/// `total_ms` is the input's whole conversion.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct Timings {
+    /// Reading and importing the input (and its companions).
+    pub import_ms: f64,
+    /// Binding `--anim` motions, `--clips` cuts and partial-body splits.
+    pub prepare_ms: f64,
+    /// Per mesh: its LOD work.
+    pub lods: Vec<MeshTimings>,
+    /// Per clip: its encoding (compression); empty with `--no-compress`.
+    pub clips: Vec<ClipTiming>,
+    /// Writing textures beside the output.
+    pub textures_ms: f64,
+    /// Compiling the scene, encoding the `.sinew` bytes and writing the file.
+    pub write_ms: f64,
+    /// The whole conversion of this input.
+    pub total_ms: f64,
+}
+
+/// One mesh's LOD wall times.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshTimings {
+    /// Mesh name.
+    pub mesh: String,
+    /// Vertex-cache optimisation of LOD 0.
+    pub optimize_ms: f64,
+    /// Each LOD level tried (simplification, repair, error measurement), LOD 1 first: the
+    /// generated ones, then a level not built when simplification was tried for it.
+    pub levels_ms: Vec<f64>,
+}
+
+/// One clip's encoding wall time.
+#[derive(Debug, Clone, Serialize)]
+pub struct ClipTiming {
+    /// Clip name.
+    pub clip: String,
+    /// Compression of the clip.
+    pub encode_ms: f64,
 }
 
 /// One mesh of the output.
@@ -217,4 +359,79 @@ pub struct ClipOut {
     pub driven_joints: usize,
     /// What compressing the clip reached; `null` with `--no-compress`.
     pub compression: Option<ClipCompressionReport>,
+}
+
+impl FileReport {
+    /// `(code, message)` of each warning, from what was converted or what was recorded.
+    pub fn warning_list(&self) -> Vec<(String, String)> {
+        if let Some(d) = &self.details {
+            return warning_pairs(d);
+        }
+        let recorded = self.recorded.as_ref().and_then(|r| r.get("diagnostics"));
+        let list = recorded.as_ref().and_then(|d| d.as_array());
+        list.into_iter()
+            .flatten()
+            .filter(|x| x.get("level").and_then(|l| l.as_str()) == Some("warning"))
+            .map(|x| {
+                let text = |k: &str| x.get(k).and_then(|v| v.as_str()).unwrap_or("").to_string();
+                (text("code"), text("message"))
+            })
+            .collect()
+    }
+}
+
+impl ConvertReport {
+    /// The report of a run: the per-input entries, the files the walk passed over, and the
+    /// summary counted from them.
+    pub fn new(
+        files: Vec<FileReport>,
+        skipped: Vec<SkippedReport>,
+        strict: bool,
+        incremental: Option<IncrementalReport>,
+    ) -> ConvertReport {
+        let count = |s: &str| files.iter().filter(|f| f.status == s).count();
+        let mut warning_codes = std::collections::BTreeMap::new();
+        for f in &files {
+            for (code, _) in f.warning_list() {
+                *warning_codes.entry(code).or_insert(0) += 1;
+            }
+        }
+        ConvertReport {
+            inputs: files.len(),
+            converted: count("converted"),
+            reused: count("reused"),
+            failed: count("failed"),
+            warnings: files.iter().map(|f| f.warnings).sum(),
+            inputs_with_warnings: files.iter().filter(|f| f.warnings > 0).count(),
+            warning_codes,
+            strict,
+            orphans: skipped
+                .iter()
+                .filter(|s| s.reason == "orphaned-companion")
+                .count(),
+            incremental,
+            files,
+            skipped,
+        }
+    }
+}
+
+/// `(code, message)` of each warning of a converted input.
+pub fn warning_pairs(d: &OutputDetails) -> Vec<(String, String)> {
+    d.diagnostics
+        .iter()
+        .filter(|x| x.level == "warning")
+        .map(|x| (x.code.clone(), x.message.clone()))
+        .collect()
+}
+
+/// The one-line error of an input failed by `--strict`: how many warnings, and the first.
+pub fn strict_error(input: &str, warnings: &[(String, String)]) -> String {
+    let n = warnings.len();
+    let first = warnings
+        .first()
+        .map(|(code, message)| format!(", the first [{code}] {message}"))
+        .unwrap_or_default();
+    let s = if n == 1 { "" } else { "s" };
+    format!("{input}: --strict: {n} warning{s}{first}")
 }

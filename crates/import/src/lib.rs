@@ -48,6 +48,11 @@ pub struct ImportOptions {
     /// glTF: which skin becomes the skeleton when the file has several (`None`: the first, with a
     /// diagnostic listing the others).
     pub gltf_skin: Option<usize>,
+    /// Half-Life: a file the model names that cannot be read (an SMD of a QC's `$body`, `$bodygroup`
+    /// or `$sequence`, an MDL's `NAMET.mdl` or sequence-group file) is a warning and what needs it is
+    /// left out. Off (the default), it is an error naming the file, line and command, as studiomdl
+    /// and the engine refuse it. Either way a QC none of whose SMDs can be read is an error.
+    pub allow_missing: bool,
 }
 
 /// The source formats sinew reads, by file extension.

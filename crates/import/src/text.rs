@@ -21,8 +21,17 @@ pub(crate) fn decode(bytes: &[u8]) -> String {
     match bytes {
         [0xFE, 0xFF, ..] => utf16(true),
         [0xFF, 0xFE, ..] => utf16(false),
-        [0xEF, 0xBB, 0xBF, rest @ ..] => String::from_utf8_lossy(rest).into_owned(),
-        _ => String::from_utf8_lossy(bytes).into_owned(),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => utf8(rest),
+        _ => utf8(bytes),
+    }
+}
+
+/// UTF-8 with invalid sequences replaced. Valid text (nearly every file) goes through
+/// `str::from_utf8`, whose ASCII fast path is several times quicker than the lossy decoder's.
+fn utf8(bytes: &[u8]) -> String {
+    match std::str::from_utf8(bytes) {
+        Ok(s) => s.to_owned(),
+        Err(_) => String::from_utf8_lossy(bytes).into_owned(),
     }
 }
 
@@ -211,6 +220,16 @@ pub(crate) fn words(line: &str) -> Vec<&str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn decodes_utf8_with_and_without_a_bom_and_replaces_invalid_bytes() {
+        assert_eq!(decode(b"HIERARCHY\nROOT Hips"), "HIERARCHY\nROOT Hips");
+        assert_eq!(decode("\u{feff}caf\u{e9}".as_bytes()), "caf\u{e9}");
+        // Latin-1 e-acute (0xE9) is not UTF-8: it becomes U+FFFD, the rest is kept.
+        assert_eq!(decode(b"# caf\xe9\nROOT"), "# caf\u{fffd}\nROOT");
+        assert_eq!(decode(b"\xef\xbb\xbfa\xffb"), "a\u{fffd}b");
+        assert_eq!(decode(&[0xFF, 0xFE, b'h', 0, b'i', 0]), "hi");
+    }
 
     #[test]
     fn words_keep_quoted_spaces_and_drop_comments() {

@@ -297,7 +297,7 @@ fn transitions_and_nodes() {
 }
 
 #[test]
-fn a_missing_companion_is_a_warning_naming_it() {
+fn a_missing_companion_is_an_error_naming_it_or_with_allow_missing_a_warning() {
     let Some(bytes) = read_corpus("mdl/man.mdl") else {
         return;
     };
@@ -307,14 +307,35 @@ fn a_missing_companion_is_a_warning_naming_it() {
             "not here",
         ))
     };
-    let s = import_bytes(
+    // man.mdl keeps its textures in manT.mdl (its texture count, at byte 180, is 0): the game
+    // cannot load it without, nor does sinew by default.
+    let e = import_bytes(
         Format::Mdl,
         "man.mdl",
         &bytes,
         &none,
         &ImportOptions::default(),
     )
-    .unwrap();
+    .unwrap_err();
+    assert_eq!(
+        (e.file.as_str(), e.section.as_str(), &e.location),
+        ("man.mdl", "textures", &Location::Offset(180)),
+        "{e}"
+    );
+    assert!(
+        e.message.contains("manT.mdl") && e.message.contains("not here"),
+        "{e}"
+    );
+    // What the header names, used or not (no sequence of man.mdl is in group 1).
+    assert_eq!(
+        sinew_import::halflife::mdl::companions("models/man.mdl", &bytes).unwrap(),
+        ["manT.mdl", "man01.mdl"]
+    );
+    let allowed = ImportOptions {
+        allow_missing: true,
+        ..ImportOptions::default()
+    };
+    let s = import_bytes(Format::Mdl, "man.mdl", &bytes, &none, &allowed).unwrap();
     let w: Vec<&str> = s.warnings().map(|d| d.message.as_str()).collect();
     assert!(w.iter().any(|m| m.contains("manT.mdl")), "{w:?}");
     assert!(s.images.is_empty());
@@ -385,14 +406,12 @@ fn mdl_error(bytes: &[u8]) -> sinew_import::ImportError {
             "not here",
         ))
     };
-    import_bytes(
-        Format::Mdl,
-        "man.mdl",
-        bytes,
-        &none,
-        &ImportOptions::default(),
-    )
-    .unwrap_err()
+    // Missing companions allowed, so that the damage is what is found.
+    let allowed = ImportOptions {
+        allow_missing: true,
+        ..ImportOptions::default()
+    };
+    import_bytes(Format::Mdl, "man.mdl", bytes, &none, &allowed).unwrap_err()
 }
 
 #[test]

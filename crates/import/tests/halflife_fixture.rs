@@ -16,6 +16,15 @@ fn files() -> Vec<(String, Vec<u8>)> {
 }
 
 fn read_with(files: &[(String, Vec<u8>)], present: &[&str]) -> (StudioModel, Vec<String>) {
+    read_allowing(files, present, true).unwrap()
+}
+
+/// [`read_with`], missing companions an error unless `allow_missing`.
+fn read_allowing(
+    files: &[(String, Vec<u8>)],
+    present: &[&str],
+    allow_missing: bool,
+) -> Result<(StudioModel, Vec<String>), sinew_import::ImportError> {
     let resolve = |name: &str| {
         files
             .iter()
@@ -23,8 +32,8 @@ fn read_with(files: &[(String, Vec<u8>)], present: &[&str]) -> (StudioModel, Vec
             .map(|(_, b)| b.clone())
             .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "not found"))
     };
-    let (m, d) = mdl::read("fixtures/rig.mdl", &files[0].1, &resolve).unwrap();
-    (m, d.into_iter().map(|d| d.message).collect())
+    let (m, d) = mdl::read("fixtures/rig.mdl", &files[0].1, &resolve, allow_missing)?;
+    Ok((m, d.into_iter().map(|d| d.message).collect()))
 }
 
 #[test]
@@ -41,14 +50,11 @@ fn skeleton_and_bind_pose() {
     // arm pitches a quarter turn about its y, so hand's offset (3, 0, 0) turns to (0, 0, -3): hand at
     // (0, 4, 7). The scene's skeleton must put them there.
     let none = |_: &str| -> std::io::Result<Vec<u8>> { Err(std::io::Error::other("no")) };
-    let scene = import_bytes(
-        Format::Mdl,
-        "rig.mdl",
-        &files()[0].1,
-        &none,
-        &ImportOptions::default(),
-    )
-    .unwrap();
+    let allow = ImportOptions {
+        allow_missing: true,
+        ..ImportOptions::default()
+    };
+    let scene = import_bytes(Format::Mdl, "rig.mdl", &files()[0].1, &none, &allow).unwrap();
     let sk = scene.skeleton.as_ref().unwrap();
     let world: Vec<Vec3> = sk
         .inverse_bind()
@@ -183,6 +189,14 @@ fn strip_fan_texture_and_transitions() {
 
 #[test]
 fn a_missing_group_file_leaves_out_only_its_sequences() {
+    // By default it is an error naming the file and the sequence that needs it.
+    let e = read_allowing(&files(), &[], false).unwrap_err();
+    assert_eq!(e.file, "fixtures/rig.mdl");
+    assert!(e.section.starts_with("sequences["), "{e}");
+    assert!(
+        e.message.contains("rig01.mdl") && e.message.contains("wave"),
+        "{e}"
+    );
     let (m, d) = read_with(&files(), &[]);
     assert_eq!(d.len(), 1);
     assert!(d[0].contains("rig01.mdl") && d[0].contains("wave"), "{d:?}");

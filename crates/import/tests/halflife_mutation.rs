@@ -53,7 +53,7 @@ fn run(files: &Files, name: &str, damaged: &[u8]) -> bool {
     } else {
         files.bytes[files.main].clone()
     };
-    let r = std::panic::catch_unwind(|| mdl::read(files.main, &main, &get));
+    let r = std::panic::catch_unwind(|| mdl::read(files.main, &main, &get, true));
     match r {
         Err(_) => panic!(
             "panic on {name} damaged to {} bytes (main {})",

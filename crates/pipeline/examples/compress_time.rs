@@ -9,7 +9,7 @@
 #![allow(clippy::unwrap_used)]
 
 use sinew_pipeline::compile::compile;
-use sinew_pipeline::compress::{compress_clip, CompressOptions};
+use sinew_pipeline::compress::{compress_clip, CompressOptions, Effort};
 use std::time::Instant;
 
 fn main() {
@@ -20,7 +20,18 @@ fn main() {
         .num_threads(1)
         .build()
         .unwrap();
-    let options = CompressOptions::peers();
+    // SINEW_EFFORT=fast|max picks another search effort (default: the default).
+    // SINEW_SETTING=default uses the default (relative) tolerance instead of the peers' 0.001 @ 0.1.
+    let mut options = if std::env::var("SINEW_SETTING").as_deref() == Ok("default") {
+        CompressOptions::default()
+    } else {
+        CompressOptions::peers()
+    };
+    options.effort = match std::env::var("SINEW_EFFORT").as_deref() {
+        Ok("fast") => Effort::Fast,
+        Ok("max") => Effort::Max,
+        _ => Effort::Default,
+    };
     println!("| file | clip | joints x keys | bytes | median ms | fastest ms |");
     println!("|---|---|---|---:|---:|---:|");
     for file in files {
@@ -48,13 +59,14 @@ fn main() {
             times.sort_by(f64::total_cmp);
             let r = report.unwrap();
             println!(
-                "| {file} | {} | {} x {} | {} | {:.2} | {:.2} |",
+                "| {file} | {} | {} x {} | {} | {:.2} | {:.2} | {:.6} |",
                 r.clip,
                 r.animated_joints,
                 r.samples,
                 r.compressed_bytes,
                 times[times.len() / 2],
-                times[0]
+                times[0],
+                r.max_error
             );
         }
     }

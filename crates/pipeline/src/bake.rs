@@ -30,7 +30,8 @@ use rayon::prelude::*;
 use sinew_core::format::Asset;
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{
-    skin_lod, Animator, AnimatorError, BlendError, Clip, ClipError, ClipId, Lod, SkinError,
+    skin_lod, Animator, AnimatorError, BlendError, Clip, ClipError, ClipId, Lod, Mesh, Skeleton,
+    SkinError,
 };
 use std::sync::Arc;
 
@@ -215,6 +216,36 @@ pub enum BakeError {
     /// Skinning failed.
     #[error("skinning: {0}")]
     Skin(#[from] SkinError),
+    /// A time given by the caller is not a finite number.
+    #[error("time {index} ({time}) is not a finite number of seconds")]
+    NonFiniteTime {
+        /// Its position in the times given.
+        index: usize,
+        /// The value.
+        time: f32,
+    },
+    /// A time given by the caller lies outside the clip.
+    #[error("time {index} ({time} s) is outside clip {clip:?}, which runs from 0 to {duration} s")]
+    TimeOutOfRange {
+        /// Clip name.
+        clip: String,
+        /// Its position in the times given.
+        index: usize,
+        /// The value, seconds.
+        time: f32,
+        /// The clip's duration, seconds.
+        duration: f32,
+    },
+    /// A caller's output buffer has the wrong size.
+    #[error("the {what} buffer holds {got} floats; {expected} are needed")]
+    BufferLength {
+        /// Which buffer.
+        what: &'static str,
+        /// Floats needed.
+        expected: usize,
+        /// Floats given.
+        got: usize,
+    },
 }
 
 fn list(names: &[String]) -> String {
@@ -449,6 +480,78 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
         indices,
         mesh_name: mesh.name.clone(),
     })
+}
+
+/// Skins LOD `lod` of mesh `mesh` through `clip` alone at each of `times` (seconds, finite; the
+/// runtime wraps a looping clip's time and clamps another's) into `out`: per time, every vertex's
+/// position `x y z` in the LOD's own (split) vertex order, `times.len() * vertices * 3` floats.
+///
+/// Each frame is posed and skinned exactly as [`bake`] does it (a fresh copy of a one-layer
+/// animator, [`Animator::evaluate_palette`], [`skin_lod`]), so at [`frame_time`]s the positions are
+/// the bits `sinew bake --clip` writes. Frames run in parallel with rayon; the result is the same
+/// for any thread count.
+pub fn skin_into(
+    skeleton: &Arc<Skeleton>,
+    clip: &Arc<Clip>,
+    mesh: &Mesh,
+    lod: usize,
+    times: &[f32],
+    out: &mut [f32],
+) -> Result<(), BakeError> {
+    let lod_data = mesh.lods.get(lod).ok_or_else(|| BakeError::NoLod {
+        lod,
+        mesh: mesh.name.clone(),
+        last: mesh.lods.len().saturating_sub(1),
+    })?;
+    if !lod_data.is_skinned() {
+        return Err(BakeError::NotSkinned(mesh.name.clone()));
+    }
+    if let Some(index) = times.iter().position(|t| !t.is_finite()) {
+        return Err(BakeError::NonFiniteTime {
+            index,
+            time: times[index],
+        });
+    }
+    let nv = lod_data.vertex_count();
+    if out.len() != times.len() * nv * 3 {
+        return Err(BakeError::BufferLength {
+            what: "positions",
+            expected: times.len() * nv * 3,
+            got: out.len(),
+        });
+    }
+    if nv == 0 {
+        return Ok(());
+    }
+    let mut animator = Animator::new(skeleton.clone());
+    let layer = animator.add_clip(clip.clone());
+    animator.set_mask(layer, None)?;
+    animator.set_weight(layer, 1.0)?;
+    animator.activate(layer)?;
+    let segment = Segment {
+        clips: vec![clip.as_ref()],
+        animator,
+        layers: vec![layer],
+        first_frame: 0,
+        frame_count: times.len(),
+        duration: clip.duration(),
+    };
+    out.par_chunks_mut(nv * 3)
+        .zip(times.par_iter())
+        .try_for_each_init(
+            || {
+                let normals = if lod_data.normals.is_empty() { 0 } else { nv };
+                (vec![Vec3::ZERO; nv], vec![Vec3::ZERO; normals])
+            },
+            |(positions, normals), (frame, &t)| -> Result<(), BakeError> {
+                // Normals are skinned too when the LOD has them, as `bake` does.
+                skin_frame(&segment, lod_data, t, positions, normals)?;
+                for (o, p) in frame.chunks_exact_mut(3).zip(positions.iter()) {
+                    o.copy_from_slice(&p.to_array());
+                }
+                Ok(())
+            },
+        )
 }
 
 /// For source order, the LOD-0 vertex each source vertex takes its values from.

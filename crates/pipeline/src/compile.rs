@@ -173,25 +173,37 @@ pub fn compress_clips(
     skeleton: Option<&Skeleton>,
     options: &CompressOptions,
 ) -> Result<CompressedClips, CompileError> {
+    compress_clips_timed(clips, skeleton, options).map(|(done, _)| done)
+}
+
+/// [`compress_clips`], with each clip's encoding wall time in seconds (clip order; clips run in
+/// parallel, so the times overlap): what `convert --timings` reports.
+pub fn compress_clips_timed(
+    clips: &[SceneClip],
+    skeleton: Option<&Skeleton>,
+    options: &CompressOptions,
+) -> Result<(CompressedClips, Vec<f64>), CompileError> {
     let clips = compile_clips(clips)?;
+    let timed = |clip: &Clip| {
+        let started = std::time::Instant::now();
+        let (c, r) = compress_clip(clip, skeleton, options);
+        (c, (r, started.elapsed().as_secs_f64()))
+    };
     // Clips are independent: compressed in parallel, results kept in clip order (the same bytes
     // at any thread count). Small scenes stay on the calling thread (see `PARALLEL_VOLUME`).
     let volume: usize = clips
         .iter()
         .map(|c| c.times().len() * c.tracks().len())
         .sum();
-    let done: Vec<(Clip, ClipCompressionReport)> = if clips.len() > 1 && volume >= PARALLEL_VOLUME {
-        clips
-            .par_iter()
-            .map(|clip| compress_clip(clip, skeleton, options))
-            .collect()
-    } else {
-        clips
-            .iter()
-            .map(|clip| compress_clip(clip, skeleton, options))
-            .collect()
-    };
-    Ok(done.into_iter().unzip())
+    let done: Vec<(Clip, (ClipCompressionReport, f64))> =
+        if clips.len() > 1 && volume >= PARALLEL_VOLUME {
+            clips.par_iter().map(timed).collect()
+        } else {
+            clips.iter().map(timed).collect()
+        };
+    let (clips, timed): (Vec<Clip>, Vec<(ClipCompressionReport, f64)>) = done.into_iter().unzip();
+    let (reports, seconds) = timed.into_iter().unzip();
+    Ok(((clips, reports), seconds))
 }
 
 /// Compiles a scene like [`compile`] with the clips of [`compress_clips`] (for the same scene

@@ -221,6 +221,9 @@ impl Clip {
             c.values.iter().all(|v| *v == first).then_some(first)
         }
         let mut times: Vec<f32> = Vec::new();
+        // The key times last appended: a curve with the same times (bit for bit; most sources key
+        // every channel at the same frames) adds nothing that the sort and dedup below would keep.
+        let mut last: &[f32] = &[];
         let mut out_tracks = Vec::with_capacity(tracks.len());
         let mut stride = 0usize;
         for t in &tracks {
@@ -231,7 +234,7 @@ impl Clip {
                 channel_t = match constant(&t.translation) {
                     Some(v) => Channel::Constant(v),
                     None => {
-                        times.extend_from_slice(&t.translation.times);
+                        add_times(&mut times, &mut last, &t.translation.times);
                         stride += 3;
                         Channel::Animated((stride - 3) as u32)
                     }
@@ -241,7 +244,7 @@ impl Clip {
                 channel_r = match constant(&t.rotation) {
                     Some(v) => Channel::Constant(v.normalize()),
                     None => {
-                        times.extend_from_slice(&t.rotation.times);
+                        add_times(&mut times, &mut last, &t.rotation.times);
                         stride += 4;
                         Channel::Animated((stride - 4) as u32)
                     }
@@ -251,7 +254,7 @@ impl Clip {
                 channel_s = match constant(&t.scale) {
                     Some(v) => Channel::Constant(v),
                     None => {
-                        times.extend_from_slice(&t.scale.times);
+                        add_times(&mut times, &mut last, &t.scale.times);
                         stride += 3;
                         Channel::Animated((stride - 3) as u32)
                     }
@@ -629,6 +632,19 @@ impl Clip {
         } else {
             t.clamp(0.0, self.duration)
         }
+    }
+}
+
+/// Appends a curve's key times to `times` unless they are bit for bit the ones appended last.
+fn add_times<'a>(times: &mut Vec<f32>, last: &mut &'a [f32], curve: &'a [f32]) {
+    let same = curve.len() == last.len()
+        && curve
+            .iter()
+            .zip(last.iter())
+            .all(|(a, b)| a.to_bits() == b.to_bits());
+    if !same {
+        times.extend_from_slice(curve);
+        *last = curve;
     }
 }
 

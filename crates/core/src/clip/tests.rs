@@ -90,6 +90,50 @@ fn layout_is_union_of_key_times_and_constants_stored_once() {
 }
 
 #[test]
+fn key_times_are_the_union_whether_curves_share_them_or_not() {
+    let moving = |times: &[f32]| {
+        let values = (0..times.len()).map(|i| Vec3::splat(i as f32)).collect();
+        Curve::new(times.to_vec(), values)
+    };
+    let track = |joint: &str, t: &[f32], s: &[f32]| TrackCurves {
+        joint: joint.into(),
+        translation: moving(t),
+        scale: moving(s),
+        ..Default::default()
+    };
+    // Shared times (appended once), then other times, then the first ones again: the union.
+    let c = Clip::from_curves(
+        "c",
+        2.0,
+        30.0,
+        false,
+        false,
+        vec![
+            track("a", &[0.0, 1.0, 2.0], &[0.0, 1.0, 2.0]),
+            track("b", &[0.5, 1.5], &[0.0, 1.0, 2.0]),
+        ],
+    )
+    .unwrap();
+    assert_eq!(c.times(), [0.0, 0.5, 1.0, 1.5, 2.0]);
+    // -0 and +0 are not the same bits, so both curves are appended; the sort puts -0 first and
+    // the dedup keeps it, as it did before identical times were skipped.
+    let c = Clip::from_curves(
+        "z",
+        1.0,
+        30.0,
+        false,
+        false,
+        vec![
+            track("a", &[-0.0, 1.0], &[-0.0, 1.0]),
+            track("b", &[0.0, 1.0], &[0.0, 1.0]),
+        ],
+    )
+    .unwrap();
+    assert_eq!(c.times().len(), 2);
+    assert_eq!(c.times()[0].to_bits(), (-0.0f32).to_bits());
+}
+
+#[test]
 fn samples_exact_at_keys_and_linear_between() {
     let c = walk(false);
     assert_eq!(sample(&c, 0.5)[0].translation, Vec3::X);

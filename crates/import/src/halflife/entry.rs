@@ -17,9 +17,9 @@ pub fn import_mdl(
     file: &str,
     bytes: &[u8],
     resolve: Resolver<'_>,
-    _options: &ImportOptions,
+    options: &ImportOptions,
 ) -> Result<Scene, ImportError> {
-    let (model, diagnostics) = mdl::read(file, bytes, resolve)?;
+    let (model, diagnostics) = mdl::read(file, bytes, resolve, options.allow_missing)?;
     scene::build_scene(
         file,
         &clip_name(file),
@@ -34,10 +34,10 @@ pub fn import_qc(
     file: &str,
     bytes: &[u8],
     resolve: Resolver<'_>,
-    _options: &ImportOptions,
+    options: &ImportOptions,
 ) -> Result<Scene, ImportError> {
     let script = qc::load(file, bytes, resolve)?;
-    let (model, diagnostics) = compile::compile(file, &script, resolve)?;
+    let (model, diagnostics) = compile::compile(file, &script, resolve, options.allow_missing)?;
     scene::build_scene(
         file,
         &clip_name(file),

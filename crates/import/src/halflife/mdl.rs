@@ -192,11 +192,32 @@ pub fn texture_companion(file: &str) -> String {
     format!("{stem}T.mdl")
 }
 
-/// Reads an MDL and its companions (through `resolve`).
+/// The companion files an MDL's header names, by file name: its texture file (`NAMET.mdl`) when it
+/// keeps no textures itself, and the file of every sequence group after the first, whether or not
+/// a sequence uses it (studiomdl writes them all). Reads the header and the group table only.
+pub fn companions(file: &str, bytes: &[u8]) -> Result<Vec<String>, ImportError> {
+    let f = Bytes { file, b: bytes };
+    check_magic(&f)?;
+    f.get("header", 0, HEADER_SIZE)?;
+    let mut out = Vec::new();
+    if f.i32("textures", 180)? == 0 {
+        out.push(texture_companion(file));
+    }
+    let (ngroups, gat) = f.table("sequence groups", 172, 176, GROUP)?;
+    for g in 1..ngroups {
+        let name = f.name("sequence groups", gat + g * GROUP + 32, 64)?;
+        out.push(name.rsplit(['/', '\\']).next().unwrap_or(&name).to_string());
+    }
+    Ok(out)
+}
+
+/// Reads an MDL and its companions (through `resolve`). A companion that cannot be read is an error
+/// naming it, or with `allow_missing` a warning (what needs it is left out).
 pub fn read(
     file: &str,
     bytes: &[u8],
     resolve: Resolver<'_>,
+    allow_missing: bool,
 ) -> Result<(StudioModel, Vec<Diagnostic>), ImportError> {
     let f = Bytes { file, b: bytes };
     check_magic(&f)?;
@@ -382,6 +403,13 @@ pub fn read(
                 let name = dir_of_group(group)?;
                 match resolve(&name) {
                     Ok(b) => group_files[group] = Some(b),
+                    Err(e) if !allow_missing => {
+                        return Err(f.err(
+                            sec,
+                            o + 156,
+                            format!("cannot read sequence group file {name} for sequence {label:?}: {e} (--allow-missing converts without it)"),
+                        ))
+                    }
                     Err(e) => diagnostics.push(Diagnostic::warning(
                         "mdl-missing-sequence-group",
                         format!("sequence group file {name} ({e}): sequence {label:?} left out"),
@@ -438,6 +466,13 @@ pub fn read(
         let name = texture_companion(file);
         match resolve(&name) {
             Ok(b) => Some(b),
+            Err(e) if !allow_missing => {
+                return Err(f.err(
+                    "textures",
+                    180,
+                    format!("the model keeps its textures in {name}, which cannot be read: {e} (--allow-missing converts without them)"),
+                ))
+            }
             Err(e) => {
                 diagnostics.push(Diagnostic::warning(
                     "mdl-missing-textures",

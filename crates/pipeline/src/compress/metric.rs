@@ -7,13 +7,18 @@ use sinew_core::{Channel, Clip, ClipBinding, Sampler, Skeleton, Transform};
 /// The joints the error is measured on: the skeleton's, then one root per track it lacks.
 pub(super) struct Rig {
     pub(super) skeleton: Skeleton,
-    /// Per joint: the local offsets of its three error points.
+    /// Per joint: the local offsets of its three error points (its local axes times
+    /// `point_scale`).
     pub(super) points: Vec<[Vec3; 3]>,
+    /// Per joint: how far along its local axes its error points are (the distance over the
+    /// joint's bind-pose model scale).
+    pub(super) point_scale: Vec<f32>,
     /// Per joint: how far its error points and descendants reach from it in the bind pose.
     pub(super) reach: Vec<f32>,
-    /// Per joint: how far its error points and its children reach from it in the bind pose (what
-    /// its rotation error moves once its children compensate it: see [`Eval`]).
-    pub(super) lever: Vec<f32>,
+    /// Per joint: its distance from its parent in the bind pose (0 for roots).
+    pub(super) bone: Vec<f32>,
+    /// The error points' distance from their joint.
+    pub(super) distance: f32,
     /// Per joint: the model-space scale of its parent (1 for roots).
     pub(super) parent_scale: Vec<f32>,
 }
@@ -114,19 +119,20 @@ impl Rig {
         fk(&parents, &bind, &mut m);
         let n = parents.len();
         let scale: Vec<f32> = m.iter().map(|a| model_scale(a).max(1e-12)).collect();
-        let points = scale
+        let point_scale: Vec<f32> = scale.iter().map(|s| distance / s).collect();
+        let points = point_scale
             .iter()
-            .map(|s| [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * (distance / s)))
+            .map(|&c| [Vec3::X, Vec3::Y, Vec3::Z].map(|a| a * c))
             .collect();
         let mut reach = vec![distance; n];
-        let mut lever = vec![distance; n];
+        let mut bone = vec![0.0; n];
         // Children come after parents: walk backwards, pushing reach up the chain.
         for j in (0..n).rev() {
             if let Some(p) = parents[j] {
                 let p = p as usize;
                 let d = (Vec3::from(m[j].translation) - Vec3::from(m[p].translation)).length();
+                bone[j] = d;
                 reach[p] = reach[p].max(reach[j] + d);
-                lever[p] = lever[p].max(distance + d);
             }
         }
         let parent_scale = parents
@@ -136,10 +142,38 @@ impl Rig {
         Some(Rig {
             skeleton,
             points,
+            point_scale,
             reach,
-            lever,
+            bone,
+            distance,
             parent_scale,
         })
+    }
+
+    /// Per joint: how far its rotation error moves error points once the joints with quantized
+    /// rotations compensate their parents' (see [`super::eval::Eval`]): its own points, and the
+    /// joints below it down to (and including) the first with a compensated rotation on each
+    /// branch: a joint without one (a constant or bind rotation) passes its parent's orientation
+    /// error on to its children. `compensating`: per joint, whether its rotation is quantized with
+    /// compensation. An upper bound (distances summed along the branch).
+    pub(super) fn levers(&self, compensating: &[bool]) -> Vec<f32> {
+        let n = self.bone.len();
+        let parents = self.skeleton.parents();
+        // Per joint: how far its error points and the joints below it that its orientation error
+        // reaches (through joints that do not compensate) extend from it.
+        let mut far = vec![self.distance; n];
+        let mut lever = vec![self.distance; n];
+        for j in (0..n).rev() {
+            let Some(p) = parents.get(j).copied().flatten().map(usize::from) else {
+                continue;
+            };
+            let passes = !compensating.get(j).copied().unwrap_or(false);
+            let below = if passes { far[j] } else { 0.0 };
+            let reach = self.bone[j] + below.max(if passes { 0.0 } else { self.distance });
+            lever[p] = lever[p].max(self.distance.max(reach));
+            far[p] = far[p].max(reach);
+        }
+        lever
     }
 
     /// Model-space error points of every joint for a local pose.

@@ -31,14 +31,25 @@
 //! 4. Bit widths, per component and segment: first the largest uniform error budget whose a-priori
 //!    widths measure within the limits, then one bit at a time off each component of each segment
 //!    for as long as the measured error (kept up to date incrementally) stays within the limits.
-//! 5. Steps 3 and 4 run for every set of kept keys from step 2 and several segment lengths (16, 32,
-//!    and for short clips 64 and lengths that split the clip into 1 to 4 equal segments); the few
-//!    smallest after the first widths get step 4's refinement, and the smallest result that the
-//!    runtime sampler measures within the limits is kept.
+//! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
+//!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
+//!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the two
+//!    smallest are measured from that budget and get step 4's refinement, and the smallest result
+//!    that the runtime sampler measures within the limits is kept.
 //!
-//! `CompressOptions::effort` ([`Effort`]) sets how many candidates step 5 tries: `Fast` one
-//! key budget and one refinement, `Max` more budgets, segment lengths and refinements after the
-//! default's own (so never a larger result).
+//! Steps 1 to 5 first run on a *thinned* source when that leaves out at least a fifth of its key
+//! times: the source without the times where it is within 1% of the tolerance of linear
+//! interpolation between the times kept (key reduction of the source itself; importers add key
+//! times where a file's own interpolation needs them far more finely than any compression
+//! tolerance: a glTF slerp to 2e-6 rad), with 99% of the tolerance. The result is kept only if it
+//! holds at every time of the whole source (measured as the final check of step 5 measures it);
+//! otherwise the search runs again on the whole source. So the tolerance holds at every source key
+//! time either way, and the search measures fewer times where the source has more than it needs.
+//!
+//! `CompressOptions::effort` ([`Effort`]) sets how many candidates step 5 refines: `Fast` the one
+//! smallest, `Default` the two smallest, `Max` also every layout measured, more key budgets and
+//! segment lengths, and the whole source as well as the thinned one, with the default's result
+//! among its candidates (so never a larger result).
 //!
 //! # Speed, and the same bytes at any thread count
 //!

@@ -6,8 +6,10 @@ use sinew_core::compressed::{
     compact_range_units, compact_rotation_range, dequant_params, pack, shared_indices,
     smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
 };
+use sinew_core::format::clip_record_size;
 use sinew_core::glam::Quat;
 use sinew_core::Clip;
+use std::sync::{Arc, OnceLock};
 
 /// Which channel of a track a component belongs to.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -72,17 +74,37 @@ pub(super) fn split_rotations(v: &[Quat]) -> Vec<(u8, [f32; 3])> {
 
 /// Step 3's fixed part for one set of kept keys and one segment length: components, clip ranges
 /// and segment sub-ranges. The bit widths and stored integers are chosen by [`Eval`].
+/// The parts that do not depend on the segment length ([`Components`]) are shared by the layouts
+/// of one set of kept keys.
 pub(super) struct Layout {
     pub(super) keys: usize,
     pub(super) seg_len: usize,
     pub(super) seg_count: usize,
-    pub(super) comps: Vec<Comp>,
-    pub(super) starts: Vec<bool>,
+    pub(super) comps: Arc<Vec<Comp>>,
+    pub(super) starts: Arc<Vec<bool>>,
     /// Per rotation, per key: the index of the dropped quaternion component.
-    pub(super) index: Vec<Vec<u8>>,
-    pub(super) ranges: Vec<[f32; 2]>,
+    pub(super) index: Arc<Vec<Vec<u8>>>,
+    pub(super) ranges: Arc<Vec<[f32; 2]>>,
     /// Per segment, per component (segment-major): the sub-range (`bits` is set later).
     pub(super) sub: Vec<SegmentComponent>,
+    /// Per segment: how many rotations store their index per key (2 bits per key each).
+    pub(super) per_key_index: Vec<usize>,
+    /// Every rotation range has its 16-bit form, so the record is compact.
+    compact: bool,
+    /// The size of the record's parts before its segment entries (see [`Layout::record_size`]),
+    /// the same for every layout of one [`Components`], once worked out.
+    prefix: Arc<OnceLock<Option<usize>>>,
+}
+
+/// The components of one set of kept keys (values, gains, smallest-three splits, clip ranges):
+/// what every segment length's [`Layout`] of it shares.
+pub(super) struct Components {
+    keys: usize,
+    comps: Arc<Vec<Comp>>,
+    starts: Arc<Vec<bool>>,
+    index: Arc<Vec<Vec<u8>>>,
+    ranges: Arc<Vec<[f32; 2]>>,
+    prefix: Arc<OnceLock<Option<usize>>>,
 }
 
 /// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`.
@@ -139,18 +161,24 @@ pub(super) fn sub_range(range: [f32; 2], keys: &[f32]) -> SegmentComponent {
     e
 }
 
-impl Layout {
-    pub(super) fn new(work: &Work, rig: &Rig, seg_len: usize, compensate: bool) -> Layout {
+impl Components {
+    pub(super) fn new(work: &Work, rig: &Rig, compensate: bool) -> Components {
         let n = work.times.len();
-        let seg_len = seg_len.clamp(1, n.max(1));
         let mut comps: Vec<Comp> = Vec::new();
         let mut starts: Vec<bool> = Vec::new();
         let mut index: Vec<Vec<u8>> = Vec::new();
+        let mut compensating = vec![false; rig.skeleton.len()];
+        for t in &work.tracks {
+            if let (Some(j), WChan::Keys(_)) = (rig.skeleton.find(&t.joint), &t.r) {
+                compensating[usize::from(j)] = compensate;
+            }
+        }
+        let levers = rig.levers(&compensating);
         for (track, t) in work.tracks.iter().enumerate() {
             let j = rig.skeleton.find(&t.joint).map_or(0, usize::from);
             let reach = rig.reach.get(j).copied().unwrap_or(1.0);
             let lever = if compensate {
-                rig.lever.get(j).copied().unwrap_or(1.0)
+                levers.get(j).copied().unwrap_or(1.0)
             } else {
                 reach
             };
@@ -192,8 +220,6 @@ impl Layout {
                 }
             }
         }
-        let nc = comps.len();
-        let seg_count = n.div_ceil(seg_len);
         let ranges: Vec<[f32; 2]> = comps
             .iter()
             .map(|c| {
@@ -210,6 +236,33 @@ impl Layout {
                 }
             })
             .collect();
+        Components {
+            keys: n,
+            comps: Arc::new(comps),
+            starts: Arc::new(starts),
+            index: Arc::new(index),
+            ranges: Arc::new(ranges),
+            prefix: Arc::new(OnceLock::new()),
+        }
+    }
+}
+
+impl Layout {
+    /// The layout of `work` in segments of `seg_len` keys.
+    #[cfg(test)]
+    pub(super) fn new(work: &Work, rig: &Rig, seg_len: usize, compensate: bool) -> Layout {
+        Layout::with_segments(&Components::new(work, rig, compensate), seg_len)
+    }
+
+    /// The layout of `base`'s components in segments of `seg_len` keys.
+    pub(super) fn with_segments(base: &Components, seg_len: usize) -> Layout {
+        let n = base.keys;
+        let seg_len = seg_len.clamp(1, n.max(1));
+        let comps = &base.comps;
+        let ranges = &base.ranges;
+        let index = &base.index;
+        let nc = comps.len();
+        let seg_count = n.div_ceil(seg_len);
         let mut sub = vec![SegmentComponent::default(); seg_count * nc];
         for s in 0..seg_count {
             let keys = s * seg_len..((s + 1) * seg_len).min(n);
@@ -217,15 +270,38 @@ impl Layout {
                 sub[s * nc + c] = sub_range(ranges[c], &comp.vals[keys.clone()]);
             }
         }
+        let rotations = index.len();
+        let compact = comps
+            .iter()
+            .zip(ranges.iter())
+            .all(|(c, r)| c.kind != Kind::R || compact_range_units(*r).is_some());
+        let per_key_index = (0..seg_count)
+            .map(|s| {
+                let keys = s * seg_len..((s + 1) * seg_len).min(n);
+                if !compact {
+                    return rotations;
+                }
+                index
+                    .iter()
+                    .filter(|list| {
+                        let i0 = list[keys.start];
+                        list[keys.clone()].iter().any(|&i| i != i0)
+                    })
+                    .count()
+            })
+            .collect();
         Layout {
             keys: n,
             seg_len,
             seg_count,
-            comps,
-            starts,
-            index,
-            ranges,
+            comps: Arc::clone(comps),
+            starts: Arc::clone(&base.starts),
+            index: Arc::clone(index),
+            ranges: Arc::clone(ranges),
             sub,
+            per_key_index,
+            compact,
+            prefix: Arc::clone(&base.prefix),
         }
     }
 
@@ -273,6 +349,48 @@ impl Layout {
         bits
     }
 
+    /// The size of the clip record [`Layout::encode`] gives with these bit widths (whatever the
+    /// stored integers): the parts before the segment entries (the same for every segment length,
+    /// worked out once by encoding), the segment entries and the shared rotation indices (each
+    /// padded to 16 bytes, as the writer pads them), then each segment's keys of `R_s` bits.
+    pub(super) fn record_size(&self, bits: &[u8], work: &Work, like: &Clip) -> Option<usize> {
+        let prefix = *self.prefix.get_or_init(|| {
+            let zero = vec![0u8; bits.len()];
+            let qi = vec![vec![0u32; self.keys]; self.comps.len()];
+            let size = clip_record_size(&self.encode(&zero, &qi, work, like)?);
+            size.checked_sub(self.entries_size() + self.data_size(&zero))
+        });
+        prefix.map(|p| p + self.entries_size() + self.data_size(bits))
+    }
+
+    /// The record's segment entries and shared rotation indices, padded as the writer pads them.
+    fn entries_size(&self) -> usize {
+        let pad = |n: usize| n.div_ceil(16) * 16;
+        let entries = self.sub.len();
+        let whole = self.sub.iter().all(|e| e.min == 0 && e.extent == 255);
+        let ranges = if whole { 0 } else { 2 * entries };
+        let rotations = self.index.len();
+        let shared = if self.compact && rotations > 0 {
+            pad(self.seg_count * rotations)
+        } else {
+            0
+        };
+        pad((5 * entries).div_ceil(8) + ranges) + shared
+    }
+
+    /// The record's data: per segment, its keys of `R_s` bits, in whole bytes.
+    fn data_size(&self, bits: &[u8]) -> usize {
+        let nc = self.comps.len();
+        (0..self.seg_count)
+            .map(|s| {
+                let seg = &bits[s * nc..(s + 1) * nc];
+                let record: usize =
+                    seg.iter().map(|&b| usize::from(b)).sum::<usize>() + 2 * self.per_key_index[s];
+                (record * self.seg_keys(s).len()).div_ceil(8)
+            })
+            .sum()
+    }
+
     /// The compressed clip with these bit widths and stored integers (per component, per key).
     pub(super) fn encode(
         &self,
@@ -302,12 +420,7 @@ impl Layout {
         }
         // Rotation indices shared by a whole segment are stored once (a compact record), when every
         // rotation range has its 16-bit form.
-        let compact = self
-            .comps
-            .iter()
-            .zip(&self.ranges)
-            .all(|(c, r)| c.kind != Kind::R || compact_range_units(*r).is_some());
-        let rotation_index = if compact && rotations > 0 {
+        let rotation_index = if self.compact && rotations > 0 {
             shared_indices(n, self.seg_len, rotations, &idx)
         } else {
             Vec::new()
@@ -317,7 +430,7 @@ impl Layout {
             self.seg_len,
             &segments,
             &rotation_index,
-            &self.starts,
+            self.starts.as_slice(),
             &q,
             &idx,
         );
@@ -332,7 +445,7 @@ impl Layout {
             tracks,
             QuantizedParts {
                 segment_len: self.seg_len as u32,
-                ranges: self.ranges.clone(),
+                ranges: self.ranges.to_vec(),
                 segments,
                 rotation_index,
                 data,

@@ -517,3 +517,144 @@ fn a_probe_changes_no_first_width_verdict() {
     // Both verdicts occur, so the comparison can tell.
     assert!(passed > 0 && failed > 0, "{passed} passed, {failed} failed");
 }
+
+#[test]
+fn record_size_is_the_size_of_the_encoded_record() {
+    // The search ranks candidates by `Layout::record_size` without encoding them: it must be the
+    // size `clip_record_size` gives the encoded clip, for any bit widths (shared and per-key
+    // rotation indices, one or many segments, compact or not).
+    let (source, rig) = moving_chain(7, 90);
+    let work = Work::from_plain(&source);
+    let mut seed = 7u32;
+    let mut next = || {
+        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        seed >> 8
+    };
+    let mut checked = 0;
+    for compensate in [true, false] {
+        // The segment lengths share one set of components (and the record's prefix size).
+        let base = Components::new(&work, &rig, compensate);
+        for seg in [1, 5, 16, 32, 90] {
+            let layout = Layout::with_segments(&base, seg);
+            for _ in 0..4 {
+                let bits: Vec<u8> = (0..layout.sub.len()).map(|_| (next() % 17) as u8).collect();
+                let qi: Vec<Vec<u32>> = (0..layout.comps.len())
+                    .map(|c| {
+                        (0..layout.keys)
+                            .map(|k| {
+                                let b = bits[(k / layout.seg_len) * layout.comps.len() + c];
+                                next() & ((1u32 << b) - 1)
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let clip = layout.encode(&bits, &qi, &work, &source).unwrap();
+                assert_eq!(
+                    layout.record_size(&bits, &work, &source),
+                    Some(clip_record_size(&clip)),
+                    "segments of {seg}, compensate {compensate}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 40);
+}
+
+#[test]
+fn a_rotation_lever_reaches_through_joints_that_do_not_compensate() {
+    // j0 -> j1 (no quantized rotation: a helper like CMU's LHipJoint) -> j2 -> j3, bones of 0.3,
+    // error points 0.1 from their joints. j0's orientation error is passed on by j1 to j2's
+    // position (0.6 from j0) and so to its error points (0.7); j2 compensates, so nothing below it
+    // is reached. With every joint compensating, the lever is one bone and the child's points.
+    let skeleton = chain(4, 0.3);
+    let clip = swing(&skeleton, 10);
+    let rig = Rig::new(&clip.to_plain(), Some(&skeleton), 0.1).unwrap();
+    let all = rig.levers(&[true, true, true, true]);
+    let helper = rig.levers(&[true, false, true, true]);
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-5;
+    assert!(
+        close(all[0], 0.4) && close(all[1], 0.4) && close(all[2], 0.4),
+        "{all:?}"
+    );
+    assert!(
+        close(all[3], 0.1),
+        "a leaf's lever is its error points' distance: {all:?}"
+    );
+    assert!(
+        close(helper[0], 0.7),
+        "through the helper to j2: {helper:?}"
+    );
+    assert!(close(helper[1], 0.4) && close(helper[2], 0.4), "{helper:?}");
+}
+
+/// [`swing`] with `extra` slerped keys inserted in every interval, as an importer adds keys where a
+/// file's own interpolation needs them.
+fn densified_swing(skeleton: &Skeleton, keys: usize, extra: usize) -> Clip {
+    let coarse = swing(skeleton, keys).to_plain();
+    let times = coarse.times();
+    let rig = Rig::new(&coarse, Some(skeleton), 0.1).unwrap();
+    let poses = rig.poses(&coarse, times);
+    let mut dense_times = Vec::new();
+    let mut dense: Vec<Vec<Quat>> = vec![Vec::new(); skeleton.len()];
+    for k in 0..times.len() {
+        let steps = if k + 1 < times.len() { extra + 1 } else { 1 };
+        for i in 0..steps {
+            let u = i as f32 / (extra + 1) as f32;
+            let t = times[k] + u * times.get(k + 1).map_or(0.0, |n| n - times[k]);
+            dense_times.push(t);
+            for (j, track) in dense.iter_mut().enumerate() {
+                let a = poses[k][j].rotation;
+                let b = poses.get(k + 1).map_or(a, |p| p[j].rotation);
+                track.push(a.slerp(b, u));
+            }
+        }
+    }
+    let tracks = skeleton
+        .names()
+        .iter()
+        .zip(dense)
+        .map(|(name, rotation)| TrackCurves {
+            joint: name.clone(),
+            rotation: Curve::new(dense_times.clone(), rotation),
+            ..Default::default()
+        })
+        .collect();
+    let last = *dense_times.last().unwrap();
+    Clip::from_curves("dense", last, 30.0, false, false, tracks).unwrap()
+}
+
+#[test]
+fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() {
+    let skeleton = chain(6, 0.3);
+    let clip = densified_swing(&skeleton, 31, 7).to_plain();
+    assert_eq!(clip.times().len(), 30 * 8 + 1);
+    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
+    let src = rig.all_points(&rig.poses(&clip, clip.times()));
+    // At 0.01 the slerped keys are within 1% of the tolerance of their neighbours' interpolation:
+    // the thinned source keeps far fewer than four fifths of the times, all of them source times.
+    let thin = thinned(&clip, &rig, &src, 0.01).expect("thinned");
+    assert!(
+        thin.times().len() * 5 < clip.times().len() * 4,
+        "{}",
+        thin.times().len()
+    );
+    assert!(thin.times().iter().all(|t| clip.times().contains(t)));
+    let options = CompressOptions {
+        tolerance: Some(0.01),
+        error_distance: Some(0.1),
+        ..CompressOptions::default()
+    };
+    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
+    assert!(c.is_compressed());
+    // Measured at every source time, the thinned ones included.
+    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.01, "error {worst}");
+    assert_eq!(r.max_error, worst);
+    assert!(c.times().iter().all(|t| clip.times().contains(t)));
+    // At a tolerance where slerp and nlerp differ by more than 1% of it, nothing is left out.
+    let src = rig.all_points(&rig.poses(&clip, clip.times()));
+    assert!(thinned(&clip, &rig, &src, 1e-7).is_none());
+}

@@ -8,12 +8,38 @@
 //! dropped. Two trials on segments two or more apart read and write disjoint parts of the state
 //! (their keys differ, and so do the source times that read them), so the refinement runs them at
 //! the same time and commits them in order, with the decisions of one trial at a time.
+//!
+//! The subtree's joints are worked on through [`Row`]s looked up once per trial (parent, track,
+//! rotation components, quantization parameters), so the per-key and per-time loops index flat
+//! buffers only.
 
 use super::eval::Eval;
 use super::metric::exceeds;
 use super::quantize::{raw_rotation, Kind, Quant};
-use sinew_core::clip::normalize_rotation;
-use sinew_core::glam::{Affine3A, Quat};
+use sinew_core::clip::{nlerp, normalize_rotation};
+use sinew_core::glam::{Affine3A, Quat, Vec3};
+use sinew_core::Transform;
+
+/// "None" for the `usize` fields of a [`Row`].
+const NONE: usize = usize::MAX;
+
+/// One joint of the trial's subtree, looked up once.
+#[derive(Clone, Copy)]
+struct Row {
+    /// The joint.
+    d: usize,
+    /// Its parent's position in the subtree, or [`NONE`] (the first row, whose parent is outside).
+    np: usize,
+    /// Its parent joint, or [`NONE`] for a root.
+    pj: usize,
+    /// Its track, or [`NONE`].
+    track: usize,
+    /// Its rotation's first component and rotation number, or [`NONE`] when not quantized.
+    fr: usize,
+    ri: usize,
+    /// Its scale where the clip does not quantize it (the local scale at every time), else `None`.
+    fixed_scale: Option<Vec3>,
+}
 
 /// The buffers of one tentative change (reused from trial to trial; `Default`: empty).
 #[derive(Default)]
@@ -29,6 +55,13 @@ pub(super) struct Trial {
     key0: usize,
     nk: usize,
     nsub: usize,
+    /// The subtree's joints, in subtree order.
+    rows: Vec<Row>,
+    /// Per slot (as `qi`): the quantization parameters of that component in the segment.
+    slot_quant: Vec<Quant>,
+    /// The changed component's kind, and for a translation its channel's first component.
+    kind: Option<Kind>,
+    first_t: usize,
     /// Per segment key: requantized (each key once; a time reads only requantized keys).
     key_done: Vec<bool>,
     /// Per segment key: how many subtree joints (the first ones, in order) were requantized at it
@@ -84,7 +117,6 @@ impl Trial {
     ) {
         let keys = e.layout.seg_keys(s);
         let j = e.joint[e.layout.comps[c].track];
-        let joints = &e.subtree[j];
         let times = &e.seg_times[s];
         self.s = s;
         self.c = c;
@@ -92,9 +124,12 @@ impl Trial {
         self.quant = e.layout.params(s, c, bits);
         self.j = j;
         self.rot = e.layout.comps[c].kind == Kind::R;
+        self.kind = Some(e.layout.comps[c].kind);
+        let track = e.layout.comps[c].track;
+        self.first_t = e.first[track][Kind::T as usize].unwrap_or(NONE);
         self.key0 = keys.start;
         self.nk = keys.len();
-        self.nsub = joints.len();
+        self.set_rows(e);
         let slots = if self.rot { 3 * self.nsub } else { 1 };
         grow(&mut self.qi, slots * self.nk, 0);
         grow(&mut self.dec, slots * self.nk, 0.0);
@@ -169,15 +204,16 @@ impl Trial {
                 self.requantize_once(e, next);
                 next += 1;
             }
-            let parents = &e.subtree_parent[j];
             'late: for (pos, &i) in times.iter().enumerate() {
-                for (n, &d) in joints.iter().enumerate() {
-                    let below = n > 0 && self.parent_moved(parents, n);
+                for n in 0..nsub {
+                    let row = self.rows[n];
+                    let below = row.np != NONE && self.moved[row.np];
                     self.moved[n] = self.dirty[n] || below;
                     if !self.moved[n] || self.seen[pos * nsub + n] {
                         continue;
                     }
-                    let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
+                    let m = self.model_of(e, pos, i, n, row.d);
+                    let r = e.error_at(i, row.d, &m) / e.ctx.limits[row.d];
                     if exceeds(r, cap) {
                         failed = true;
                         break 'late;
@@ -189,17 +225,130 @@ impl Trial {
         self.worst = if failed { f32::INFINITY } else { worst };
     }
 
+    /// Looks up the subtree's rows and the quantization parameters of the slots the trial
+    /// requantizes.
+    fn set_rows(&mut self, e: &Eval) {
+        let joints = &e.subtree[self.j];
+        let parents = &e.subtree_parent[self.j];
+        self.nsub = joints.len();
+        self.rows.clear();
+        self.slot_quant.clear();
+        let nc = e.layout.comps.len();
+        for (n, &d) in joints.iter().enumerate() {
+            let track = e.track_of[d].unwrap_or(NONE);
+            let fr = e.track_of[d]
+                .and_then(|tr| e.first[tr][Kind::R as usize])
+                .unwrap_or(NONE);
+            let scaled = e.track_of[d].is_some_and(|tr| e.first[tr][Kind::S as usize].is_some());
+            self.rows.push(Row {
+                d,
+                np: if n > 0 { parents[n] } else { NONE },
+                pj: e.parent(d).unwrap_or(NONE),
+                track,
+                fr,
+                ri: if fr == NONE {
+                    0
+                } else {
+                    e.layout.comps[fr].rot
+                },
+                fixed_scale: (!scaled).then_some(e.base[d].scale),
+            });
+            if self.rot {
+                for a in 0..3 {
+                    let x = fr.wrapping_add(a);
+                    self.slot_quant.push(if fr == NONE {
+                        Quant::default()
+                    } else if x == self.c {
+                        self.quant
+                    } else {
+                        e.params[self.s * nc + x]
+                    });
+                }
+            }
+        }
+    }
+
     /// Resamples the subtree at the segment's time `pos` (source time `i`) and measures the joints
     /// that moved: the largest ratio of error to limit, or `None` at the first over `cap`.
     fn measure_time(&mut self, e: &Eval, pos: usize, i: usize, cap: f32) -> Option<f32> {
-        self.resample(e, pos, i);
+        let nsub = self.nsub;
+        let nj = e.nj;
         let mut worst = 0.0f32;
-        for (n, &d) in e.subtree[self.j].iter().enumerate() {
-            if !self.moved[n] {
+        for n in 0..nsub {
+            let row = self.rows[n];
+            let below = row.np != NONE && self.moved[row.np];
+            let moved = self.dirty[n] || below;
+            self.moved[n] = moved;
+            if !moved {
                 continue;
             }
-            self.seen[pos * self.nsub + n] = true;
-            let r = e.error_at(i, d, &self.model_of(e, pos, i, n, d)) / e.ctx.limits[d];
+            let at = pos * nsub + n;
+            let d = row.d;
+            let local = if self.dirty[n] {
+                // Only the changed translation or scale component, or the subtree's rotations,
+                // differ from the state: the rest of the local transform is the state's (the
+                // values `Transform::to_affine` of the sampled pose gives, bit for bit).
+                let state = e.local_aff[i * nj + d];
+                let a = match (self.kind, row.fixed_scale) {
+                    (Some(Kind::R), Some(scale)) if row.fr != NONE => {
+                        let (k0, k1, alpha) = e.at[i];
+                        let rot = if alpha == 0.0 {
+                            normalize_rotation(self.raw_of(e, n, row.ri, k0))
+                        } else {
+                            nlerp(
+                                self.raw_of(e, n, row.ri, k0),
+                                self.raw_of(e, n, row.ri, k1),
+                                alpha,
+                            )
+                        };
+                        Affine3A::from_scale_rotation_translation(
+                            scale,
+                            rot,
+                            state.translation.into(),
+                        )
+                    }
+                    (Some(Kind::T), _) if self.first_t != NONE => {
+                        let (k0, k1, alpha) = e.at[i];
+                        let f = self.first_t;
+                        let v = |k: usize| {
+                            let at = |x: usize| match self.in_segment(k).filter(|_| x == self.c) {
+                                Some(kk) if self.key_done[kk] => self.dec[kk],
+                                _ => e.dec[x][k],
+                            };
+                            Vec3::new(at(f), at(f + 1), at(f + 2))
+                        };
+                        let t = if alpha == 0.0 {
+                            v(k0)
+                        } else {
+                            v(k0).lerp(v(k1), alpha)
+                        };
+                        Affine3A {
+                            matrix3: state.matrix3,
+                            translation: t.into(),
+                        }
+                    }
+                    _ => self.sampled_local(e, n, i).to_affine(),
+                };
+                self.local_aff[at] = a;
+                self.local_set[at] = true;
+                a
+            } else if self.local_set[at] {
+                self.local_aff[at]
+            } else {
+                e.local_aff[i * nj + d]
+            };
+            let pm = if row.pj == NONE {
+                Affine3A::IDENTITY
+            } else if row.np != NONE {
+                self.model_of(e, pos, i, row.np, row.pj)
+            } else {
+                e.model[i * nj + row.pj]
+            };
+            let m = pm * local;
+            self.model[at] = m;
+            self.model_set[at] = true;
+            self.seen[at] = true;
+            let r = e.error_at(i, d, &m) / e.ctx.limits[d];
             if exceeds(r, cap) {
                 return None;
             }
@@ -208,13 +357,41 @@ impl Trial {
         Some(worst)
     }
 
+    /// Subtree joint `n`'s local pose at source time `i` as the sampler computes it, with the
+    /// trial's values.
+    fn sampled_local(&self, e: &Eval, n: usize, i: usize) -> Transform {
+        let row = self.rows[n];
+        let d = row.d;
+        if row.track == NONE {
+            e.base[d]
+        } else if self.rot {
+            e.sampled_with(
+                row.track,
+                i,
+                e.base[d],
+                |x, k| e.dec[x][k],
+                |ri, k| self.raw_of(e, n, ri, k),
+            )
+        } else {
+            e.sampled_with(
+                row.track,
+                i,
+                e.base[d],
+                |x, k| match self.in_segment(k).filter(|_| x == self.c) {
+                    Some(kk) if self.key_done[kk] => self.dec[kk],
+                    _ => e.dec[x][k],
+                },
+                |ri, k| e.raw[ri][k],
+            )
+        }
+    }
+
     /// Writes the trial's changes into `e` (the state it was run on, unchanged since).
     pub(super) fn commit(&self, e: &mut Eval) {
         let nc = e.layout.comps.len();
         let nj = e.nj;
         e.bits[self.s * nc + self.c] = self.bits;
         e.params[self.s * nc + self.c] = self.quant;
-        let joints = std::mem::take(&mut e.subtree[self.j]);
         if !self.rot {
             for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
                 e.qi[self.c][self.key0 + kk] = self.qi[kk];
@@ -223,58 +400,41 @@ impl Trial {
         }
         for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
             let k = self.key0 + kk;
-            for (n, &d) in joints.iter().enumerate().take(self.reached[kk]) {
+            for (n, row) in self.rows.iter().enumerate().take(self.reached[kk]) {
                 let at = n * self.nk + kk;
-                if let Some(c0) = e.track_of[d].and_then(|tr| e.first[tr][Kind::R as usize]) {
+                if row.fr != NONE {
                     for a in 0..3 {
                         let slot = (3 * n + a) * self.nk + kk;
-                        e.qi[c0 + a][k] = self.qi[slot];
-                        e.dec[c0 + a][k] = self.dec[slot];
+                        e.qi[row.fr + a][k] = self.qi[slot];
+                        e.dec[row.fr + a][k] = self.dec[slot];
                     }
-                    e.raw[e.layout.comps[c0].rot][k] = self.raw[at];
+                    e.raw[row.ri][k] = self.raw[at];
                 }
-                e.key_rot[k * nj + d] = self.key_rot[at];
+                e.key_rot[k * nj + row.d] = self.key_rot[at];
             }
         }
         let times = std::mem::take(&mut e.seg_times[self.s]);
         for (pos, &i) in times.iter().enumerate() {
-            for (n, &d) in joints.iter().enumerate() {
+            for (n, row) in self.rows.iter().enumerate() {
                 let at = pos * self.nsub + n;
                 if self.local_set[at] {
-                    e.local_aff[i * nj + d] = self.local_aff[at];
+                    e.local_aff[i * nj + row.d] = self.local_aff[at];
                 }
                 if self.model_set[at] {
-                    e.model[i * nj + d] = self.model[at];
+                    e.model[i * nj + row.d] = self.model[at];
                 }
             }
         }
         e.seg_times[self.s] = times;
-        e.subtree[self.j] = joints;
     }
 
     fn in_segment(&self, k: usize) -> Option<usize> {
         k.checked_sub(self.key0).filter(|&kk| kk < self.nk)
     }
 
-    /// Quantizes `v` as component `x` (slot `sl`) of key `k` of the segment (`kk` in it), which
-    /// this trial quantizes once: returns whether the stored value differs from the state's, and
-    /// the decoded value.
-    fn store(&mut self, e: &Eval, x: usize, sl: usize, k: usize, kk: usize, v: f32) -> (bool, f32) {
-        let quant = if x == self.c {
-            self.quant
-        } else {
-            e.params[self.s * e.layout.comps.len() + x]
-        };
-        let (q, y) = quant.quantize(v);
-        let changed = q != e.qi[x][k] || y.to_bits() != e.dec[x][k].to_bits();
-        let at = sl * self.nk + kk;
-        self.qi[at] = q;
-        self.dec[at] = y;
-        (changed, y)
-    }
-
     /// Subtree joint `n`'s rotation as decoded at key `k` (rotation number `ri`), as the trial has
     /// it.
+    #[inline]
     fn raw_of(&self, e: &Eval, n: usize, ri: usize, k: usize) -> Quat {
         match self.in_segment(k) {
             Some(kk) if self.key_done[kk] && n < self.reached[kk] => self.raw[n * self.nk + kk],
@@ -294,119 +454,66 @@ impl Trial {
     /// [`Eval::requantize_key`] for the changed component at key `k` of the segment.
     fn requantize(&mut self, e: &Eval, k: usize) {
         let kk = k - self.key0;
+        let nk = self.nk;
         if !self.rot {
             // A translation or scale component: nothing else depends on it.
             let v = e.layout.comps[self.c].vals[k];
-            let (changed, _) = self.store(e, self.c, 0, k, kk, v);
-            self.dirty[0] |= changed;
+            let (q, y) = self.quant.quantize(v);
+            self.dirty[0] |= q != e.qi[self.c][k] || y.to_bits() != e.dec[self.c][k].to_bits();
+            self.qi[kk] = q;
+            self.dec[kk] = y;
             return;
         }
-        let joints = &e.subtree[self.j];
-        let parents = &e.subtree_parent[self.j];
-        for (n, &d) in joints.iter().enumerate() {
+        for n in 0..self.nsub {
             if n > 0 && !e.compensate {
                 break;
             }
+            let row = self.rows[n];
             // A parent inside the subtree was requantized just before (parents come first).
-            let pr = match (e.parent(d), parents.get(n).filter(|&&np| np != usize::MAX)) {
-                (None, _) => Quat::IDENTITY,
-                (Some(_), Some(&np)) => self.key_rot[np * self.nk + kk],
-                (Some(p), None) => e.key_rot[k * e.nj + p],
+            let pr = if row.pj == NONE {
+                Quat::IDENTITY
+            } else if row.np != NONE {
+                self.key_rot[row.np * nk + kk]
+            } else {
+                e.key_rot[k * e.nj + row.pj]
             };
-            let mut rot = e.base[d].rotation;
+            let mut rot = e.base[row.d].rotation;
             let mut rot_changed = false;
-            if let Some(c0) = e.track_of[d].and_then(|tr| e.first[tr][Kind::R as usize]) {
-                let ri = e.layout.comps[c0].rot;
-                let index = e.layout.index[ri][k];
-                let vals = e.rotation_values(d, c0, k, pr);
+            if row.fr != NONE {
+                let index = e.layout.index[row.ri][k];
+                let vals = e.rotation_values(row.d, row.fr, k, pr);
                 let mut q = [0.0; 3];
                 for (a, &v) in vals.iter().enumerate() {
-                    let (changed, y) = self.store(e, c0 + a, 3 * n + a, k, kk, v);
-                    rot_changed |= changed;
+                    let x = row.fr + a;
+                    let slot = 3 * n + a;
+                    let (qq, y) = self.slot_quant[slot].quantize(v);
+                    rot_changed |= qq != e.qi[x][k] || y.to_bits() != e.dec[x][k].to_bits();
+                    self.qi[slot * nk + kk] = qq;
+                    self.dec[slot * nk + kk] = y;
                     q[a] = y;
                 }
                 self.dirty[n] |= rot_changed;
                 let raw = raw_rotation(index, q);
-                self.raw[n * self.nk + kk] = raw;
+                self.raw[n * nk + kk] = raw;
                 rot = normalize_rotation(raw);
             }
             if n == 0 && !rot_changed {
                 // The joint's rotation at this key did not change: nothing below it does.
                 break;
             }
-            self.key_rot[n * self.nk + kk] = pr * rot;
+            self.key_rot[n * nk + kk] = pr * rot;
             self.reached[kk] = n + 1;
         }
     }
 
-    /// Whether subtree joint `n`'s parent (in the subtree) moved.
-    fn parent_moved(&self, parents: &[usize], n: usize) -> bool {
-        parents
-            .get(n)
-            .and_then(|&np| self.moved.get(np))
-            .copied()
-            .unwrap_or(false)
-    }
-
     /// Subtree joint `n` (`d`)'s model transform at the segment's time `pos` (source time `i`).
+    #[inline]
     fn model_of(&self, e: &Eval, pos: usize, i: usize, n: usize, d: usize) -> Affine3A {
         let at = pos * self.nsub + n;
         if self.model_set[at] {
             self.model[at]
         } else {
             e.model[i * e.nj + d]
-        }
-    }
-
-    /// [`Eval::resample`] for the subtree at the segment's time `pos` (source time `i`).
-    fn resample(&mut self, e: &Eval, pos: usize, i: usize) {
-        let joints = &e.subtree[self.j];
-        let parents = &e.subtree_parent[self.j];
-        for (n, &d) in joints.iter().enumerate() {
-            let below = n > 0 && self.parent_moved(parents, n);
-            self.moved[n] = self.dirty[n] || below;
-            if !self.moved[n] {
-                continue;
-            }
-            let at = pos * self.nsub + n;
-            if self.dirty[n] {
-                // Only the changed translation or scale component, or the subtree's rotations,
-                // differ from the state.
-                let local = match e.track_of[d] {
-                    Some(tr) if self.rot => e.sampled_with(
-                        tr,
-                        i,
-                        e.base[d],
-                        |x, k| e.dec[x][k],
-                        |ri, k| self.raw_of(e, n, ri, k),
-                    ),
-                    Some(tr) => e.sampled_with(
-                        tr,
-                        i,
-                        e.base[d],
-                        |x, k| match self.in_segment(k).filter(|_| x == self.c) {
-                            Some(kk) if self.key_done[kk] => self.dec[kk],
-                            _ => e.dec[x][k],
-                        },
-                        |ri, k| e.raw[ri][k],
-                    ),
-                    None => e.base[d],
-                };
-                self.local_aff[at] = local.to_affine();
-                self.local_set[at] = true;
-            }
-            let local = if self.local_set[at] {
-                self.local_aff[at]
-            } else {
-                e.local_aff[i * e.nj + d]
-            };
-            let pm = match (e.parent(d), parents.get(n).filter(|&&np| np != usize::MAX)) {
-                (None, _) => Affine3A::IDENTITY,
-                (Some(p), Some(&np)) => self.model_of(e, pos, i, np, p),
-                (Some(p), None) => e.model[i * e.nj + p],
-            };
-            self.model[at] = pm * local;
-            self.model_set[at] = true;
         }
     }
 }

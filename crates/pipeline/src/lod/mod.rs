@@ -269,6 +269,19 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
+    build_lods_timed(mesh, skeleton, options, tuning, &mut Vec::new())
+}
+
+/// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
+/// repair and measurement; a level not built counts when simplification was tried) onto
+/// `seconds`.
+fn build_lods_timed(
+    mesh: &Mesh,
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+    seconds: &mut Vec<f64>,
+) -> Result<LodChain, LodError> {
     options.validate()?;
     validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
         mesh: mesh.name.clone(),
@@ -329,6 +342,7 @@ pub fn build_lods_tuned(
     let mut previous = mesh.geometry.clone();
     let mut previous_tris = base_tris;
     let mut accumulated = 0.0f32;
+    let mut started = std::time::Instant::now();
     for (k, &ratio) in options.ratios.iter().enumerate() {
         let target = ((base_tris as f64) * ratio as f64).round() as usize;
         let not_built = |reached, reason| NotBuiltLod {
@@ -419,6 +433,9 @@ pub fn build_lods_tuned(
                 NotBuiltReason::NoCollapse
             };
             chain.not_built.push(not_built(Some(reached), reason));
+            let now = std::time::Instant::now();
+            seconds.push(now.duration_since(started).as_secs_f64());
+            started = now;
             continue;
         }
         let step_error = built.error;
@@ -460,6 +477,9 @@ pub fn build_lods_tuned(
         if tuning.chain {
             previous = lod;
         }
+        let now = std::time::Instant::now();
+        seconds.push(now.duration_since(started).as_secs_f64());
+        started = now;
     }
     Ok(chain)
 }
@@ -507,25 +527,53 @@ pub fn generate_mesh_lods(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
+    generate_mesh_lods_timed(meshes, skeleton, options, tuning).map(|(r, _)| r)
+}
+
+/// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MeshLodTimes {
+    /// Vertex-cache optimisation of LOD 0.
+    pub optimize: f64,
+    /// Each level tried (simplification, repair and error measurement), most detailed first: the
+    /// generated levels, then a level not built when simplification was tried for it.
+    pub levels: Vec<f64>,
+}
+
+/// [`generate_mesh_lods`], with each mesh's wall times (mesh order; meshes run in parallel, so
+/// the times overlap).
+pub fn generate_mesh_lods_timed(
+    meshes: &mut [Mesh],
+    skeleton: Option<&Skeleton>,
+    options: &LodOptions,
+    tuning: &LodTuning,
+) -> Result<(Vec<MeshLodReport>, Vec<MeshLodTimes>), LodError> {
     options.validate()?;
-    let one = |mesh: &mut Mesh| -> Result<MeshLodReport, LodError> {
+    let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
+        let started = std::time::Instant::now();
         optimize_base(mesh)?;
-        let chain = build_lods_tuned(mesh, skeleton, options, tuning)?;
+        let mut times = MeshLodTimes {
+            optimize: started.elapsed().as_secs_f64(),
+            levels: Vec::new(),
+        };
+        let chain = build_lods_timed(mesh, skeleton, options, tuning, &mut times.levels)?;
         mesh.lods = chain.lods;
         mesh.lods_not_built = chain.not_built;
-        Ok(MeshLodReport {
+        let report = MeshLodReport {
             mesh: mesh.name.clone(),
             base_triangles: mesh.geometry.triangle_count(),
             lods: mesh.lods.clone(),
             not_built: mesh.lods_not_built.clone(),
-        })
+        };
+        Ok((report, times))
     };
-    let done: Vec<Result<MeshLodReport, LodError>> = if meshes.len() > 1 {
+    let done: Vec<Result<(MeshLodReport, MeshLodTimes), LodError>> = if meshes.len() > 1 {
         meshes.par_iter_mut().map(one).collect()
     } else {
         meshes.iter_mut().map(one).collect()
     };
-    done.into_iter().collect()
+    let done: Vec<(MeshLodReport, MeshLodTimes)> = done.into_iter().collect::<Result<_, _>>()?;
+    Ok(done.into_iter().unzip())
 }
 
 #[cfg(test)]

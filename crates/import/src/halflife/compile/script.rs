@@ -11,15 +11,21 @@ use sinew_core::format::game::{material_flags, motion_flags};
 use sinew_scene::Diagnostic;
 use std::f64::consts::PI;
 
-/// Compiles a QC script (its includes already expanded).
+/// Compiles a QC script (its includes already expanded). An SMD that cannot be read is an error
+/// naming the file, line and command (studiomdl stops there too), or with `allow_missing` a
+/// `qc-missing-smd` warning; a script none of whose SMDs can be read is an error either way.
 pub fn compile(
     qc: &str,
     script: &Script,
     resolve: Resolver<'_>,
+    allow_missing: bool,
 ) -> Result<(StudioModel, Vec<Diagnostic>), ImportError> {
     let mut s = State {
         qc,
         resolve,
+        allow_missing,
+        smds_read: 0,
+        first_missing: None,
         diagnostics: Vec::new(),
         cd: String::new(),
         default_scale: 1.0,
@@ -206,6 +212,14 @@ pub fn compile(
             }
         }
     }
+    if s.smds_read == 0 {
+        if let Some(first) = s.first_missing.take() {
+            return Err(ImportError {
+                message: format!("{}; no SMD the script names can be read", first.message),
+                ..first
+            });
+        }
+    }
     build(s, script)
 }
 
@@ -228,24 +242,37 @@ pub(super) fn smd_path(cd: &str, name: &str) -> String {
     }
 }
 
-/// Reads an SMD the script names, or `None` with a warning when the file is missing.
+/// Reads an SMD the script names at token `at`. A missing file is an error naming the script's file,
+/// line and command, or with `allow_missing` `None` and a warning.
 pub(super) fn read_smd(
     s: &mut State,
+    script: &Script,
     name: &str,
     section: &str,
-    line: usize,
+    at: &Tok,
 ) -> Result<Option<Smd>, ImportError> {
     let path = smd_path(&s.cd, name);
     match (s.resolve)(&path) {
-        Ok(bytes) => smd::parse(&path, &bytes).map(Some),
+        Ok(bytes) => {
+            s.smds_read += 1;
+            smd::parse(&path, &bytes).map(Some)
+        }
         Err(e) => {
+            let error = script.error_at(at, section, format!("cannot read {path}: {e}"));
+            if !s.allow_missing {
+                return Err(ImportError {
+                    message: format!("{} (--allow-missing leaves it out)", error.message),
+                    ..error
+                });
+            }
             s.diagnostics.push(Diagnostic::warning(
                 "qc-missing-smd",
                 format!(
-                    "{} line {line} ({section}): cannot read {path}: {e}; left out",
-                    s.qc
+                    "{} line {} ({section}): cannot read {path}: {e}; left out",
+                    error.file, at.line
                 ),
             ));
+            s.first_missing.get_or_insert(error);
             Ok(None)
         }
     }
@@ -264,7 +291,7 @@ pub(super) fn studio(s: &mut State, c: &mut Cursor, section: &str) -> Result<(),
             scale = c.number(section, "a scale")?;
         }
     }
-    let Some(smd) = read_smd(s, &name, section, tok.line)? else {
+    let Some(smd) = read_smd(s, c.script(), &name, section, tok)? else {
         if let Some(p) = s.parts.last_mut() {
             p.1.push(None);
         }
@@ -341,7 +368,7 @@ pub(super) fn sequence(s: &mut State, c: &mut Cursor) -> Result<(), ImportError>
     let mut adjust = s.default_adjust;
     let mut scale = s.default_scale;
     let mut zrotation = s.default_zrotation;
-    let mut files: Vec<(String, usize)> = Vec::new();
+    let mut files: Vec<&Tok> = Vec::new();
     let (mut start, mut end) = (0i32, MAX_FRAMES - 1);
     let mut depth = 0i32;
     loop {
@@ -415,13 +442,12 @@ pub(super) fn sequence(s: &mut State, c: &mut Cursor) -> Result<(), ImportError>
         } else if let Some(m) = control(&t.text) {
             seq.motion |= m;
         } else if lower == "animation" {
-            let f = c.expect("$sequence", "an animation SMD")?;
-            files.push((f.text.clone(), f.line));
+            files.push(c.expect("$sequence", "an animation SMD")?);
         } else if activity_number(&t.text) != 0 {
             seq.activity = activity_number(&t.text);
             seq.weight = c.integer("$sequence", "an activity weight")?;
         } else {
-            files.push((t.text.clone(), t.line));
+            files.push(t);
         }
         if depth < 0 {
             return Err(script.error_at(t, "$sequence", "missing `{`"));
@@ -434,8 +460,9 @@ pub(super) fn sequence(s: &mut State, c: &mut Cursor) -> Result<(), ImportError>
             format!("sequence {:?} names no animation", seq.label),
         ));
     }
-    for (file, line) in files {
-        let Some(smd) = read_smd(s, &file, "$sequence", line)? else {
+    for tok in files {
+        let (file, line) = (&tok.text, tok.line);
+        let Some(smd) = read_smd(s, script, file, "$sequence", tok)? else {
             seq.anims.clear();
             break;
         };

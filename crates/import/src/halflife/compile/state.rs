@@ -173,6 +173,13 @@ pub(super) struct Texture {
 pub(super) struct State<'a> {
     pub(super) qc: &'a str,
     pub(super) resolve: Resolver<'a>,
+    /// A missing SMD is a warning (`--allow-missing`), not an error.
+    pub(super) allow_missing: bool,
+    /// SMDs read so far.
+    pub(super) smds_read: usize,
+    /// The first SMD that could not be read (with `allow_missing`), as the error a QC none of
+    /// whose SMDs can be read gives.
+    pub(super) first_missing: Option<crate::ImportError>,
     pub(super) diagnostics: Vec<Diagnostic>,
     pub(super) cd: String,
     pub(super) default_scale: f32,

@@ -19,7 +19,7 @@ fn files<'a>(list: &'a [(&'static str, String)]) -> impl Fn(&str) -> std::io::Re
 fn compile(qc_text: &str, list: &[(&'static str, String)]) -> (StudioModel, Vec<Diagnostic>) {
     let r = files(list);
     let script = qc::load("m.qc", qc_text.as_bytes(), &r).unwrap();
-    super::compile("m.qc", &script, &r).unwrap()
+    super::compile("m.qc", &script, &r, true).unwrap()
 }
 
 /// A reference SMD: nodes `root` (0), `a` (1, under root), `b` (2, under root), `spare` (3, unused),
@@ -215,6 +215,55 @@ fn skins_controllers_events_blends_and_eyes() {
 }
 
 #[test]
+fn a_missing_smd_is_an_error_naming_file_line_and_command_unless_allowed() {
+    let r = reference(&[
+        (1, [2.0, 0.0, 0.0]),
+        (1, [3.0, 0.0, 0.0]),
+        (1, [2.0, 1.0, 0.0]),
+    ]);
+    let list = [
+        ("r.smd", r),
+        ("inc.qci", "\n$sequence s \"lost\"\n".to_string()),
+    ];
+    let have = files(&list);
+    // By default the first missing SMD stops the compile, as in studiomdl; an SMD named in an
+    // included file is reported at that file's line.
+    let text = "$body b \"r\"\n$include \"inc.qci\"\n$sequence t \"r\"\n";
+    let script = qc::load("m.qc", text.as_bytes(), &have).unwrap();
+    let e = super::compile("m.qc", &script, &have, false).unwrap_err();
+    assert_eq!(
+        (e.file.as_str(), e.section.as_str(), &e.location),
+        ("inc.qci", "$sequence", &crate::Location::Line(2)),
+        "{e}"
+    );
+    assert!(e.message.contains("cannot read lost.smd"), "{e}");
+    assert!(e.message.contains("--allow-missing"), "{e}");
+    // Allowed, the model is built without it.
+    let (m, d) = super::compile("m.qc", &script, &have, true).unwrap();
+    assert_eq!(m.sequences.len(), 2);
+    assert!(m.sequences[0].blends.is_empty());
+    assert_eq!(d.iter().filter(|x| x.code == "qc-missing-smd").count(), 1);
+    // When none of the SMDs can be read, it is an error even when allowed: the first one named.
+    let none = files(&[]);
+    let text = "// a model\n$cd \".\"\n$body b \"gone\"\n$sequence s \"lost\"\n";
+    let script = qc::load("m.qc", text.as_bytes(), &none).unwrap();
+    for allow in [false, true] {
+        let e = super::compile("m.qc", &script, &none, allow).unwrap_err();
+        assert_eq!(
+            (e.file.as_str(), e.section.as_str(), &e.location),
+            ("m.qc", "$body", &crate::Location::Line(3)),
+            "{e}"
+        );
+        assert!(e.message.contains("cannot read gone.smd"), "{e}");
+        assert_eq!(
+            e.message.contains("no SMD the script names can be read"),
+            allow,
+            "{e}"
+        );
+    }
+}
+
+#[test]
 fn missing_files_and_unknown_commands_are_warnings_naming_them() {
     let r = reference(&[
         (1, [2.0, 0.0, 0.0]),
@@ -257,7 +306,7 @@ fn bad_scripts_are_errors_naming_the_line() {
         ("$texrendermode \"a.bmp\" glowing\n", 1, "glowing"),
     ] {
         let script = qc::load("m.qc", text.as_bytes(), &r).unwrap();
-        let e = super::compile("m.qc", &script, &r).unwrap_err();
+        let e = super::compile("m.qc", &script, &r, true).unwrap_err();
         assert_eq!(e.location, crate::Location::Line(line), "{text:?}: {e}");
         assert!(
             e.to_string().contains(what) || e.to_string().contains("expected"),

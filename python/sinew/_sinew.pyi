@@ -28,8 +28,8 @@ def bake(path: str, clips: List[str] = ..., fps: Optional[float] = ..., mesh: in
 def write_cache(path: str, format: str, positions: bytes, frames: int, vertices: int, fps: float) -> None:
     """Writes a PC2 or MDD cache atomically."""
 
-def load(path: str, lods: bool = ..., ms3d_position_keys: Optional[str] = ..., gltf_skin: Optional[int] = ...
-         ) -> Tuple[AssetHandle, Dict[str, Any]]:
+def load(path: str, lods: bool = ..., ms3d_position_keys: Optional[str] = ..., gltf_skin: Optional[int] = ...,
+         allow_missing: bool = ...) -> Tuple[AssetHandle, Dict[str, Any]]:
     """Reads a file as the runtime sees it: (handle, the parts as a dict of read-only arrays)."""
 
 @final

@@ -334,7 +334,7 @@ def _lod(d: Dict[str, Any]) -> Lod:
 
 
 def load(path: PathLike, lods: bool = False, ms3d_position_keys: Optional[str] = None,
-         gltf_skin: Optional[int] = None) -> Asset:
+         gltf_skin: Optional[int] = None, allow_missing: bool = False) -> Asset:
     """Reads a file as sinew's runtime sees it and returns its :class:`Asset`.
 
     Args:
@@ -343,12 +343,16 @@ def load(path: PathLike, lods: bool = False, ms3d_position_keys: Optional[str] =
         ms3d_position_keys: ``"auto"`` (default), ``"viewer"`` or ``"parent"``, as
             ``--ms3d-position-keys``.
         gltf_skin: the glTF skin that becomes the skeleton, as ``--gltf-skin``.
+        allow_missing: Half-Life: load without a file the model names that is missing (a QC's SMD,
+            an MDL's texture or sequence-group file), as ``--allow-missing``; by default that is an
+            :class:`InputError`.
 
     Raises:
         InputError: a missing, unreadable or malformed file, with the command line's one-line
             message (file, section, offset or line).
     """
-    handle, p = _sinew.load(os.fspath(path), bool(lods), ms3d_position_keys, gltf_skin)
+    handle, p = _sinew.load(os.fspath(path), bool(lods), ms3d_position_keys, gltf_skin,
+                            bool(allow_missing))
     s = p["skeleton"]
     return Asset(
         path=p["path"],

@@ -38,13 +38,14 @@ pub struct AssetHandle {
 /// LODs when `lods` is true and the source has none). Returns the handle and the parts as a dict of
 /// read-only numpy arrays and strings.
 #[pyfunction]
-#[pyo3(signature = (path, lods=false, ms3d_position_keys=None, gltf_skin=None))]
+#[pyo3(signature = (path, lods=false, ms3d_position_keys=None, gltf_skin=None, allow_missing=false))]
 pub fn load<'py>(
     py: Python<'py>,
     path: PathBuf,
     lods: bool,
     ms3d_position_keys: Option<&str>,
     gltf_skin: Option<usize>,
+    allow_missing: bool,
 ) -> PyResult<(AssetHandle, Bound<'py, PyDict>)> {
     let rule = match ms3d_position_keys {
         None | Some("auto") => PositionKeys::Auto,
@@ -59,6 +60,7 @@ pub fn load<'py>(
     let import = ImportArgs {
         ms3d_position_keys: rule,
         gltf_skin,
+        allow_missing,
     };
     let shown = path.display().to_string();
     let asset = py

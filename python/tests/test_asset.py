@@ -324,3 +324,17 @@ def test_every_public_name_is_documented_and_the_stubs_match_the_extension(tmp_p
                         str(ROOT / "python" / "sinew" / "asset.py")], capture_output=True, text=True, env=env,
                        cwd=tmp_path)
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_a_missing_half_life_companion_is_an_error_unless_allowed(corpus_dir, tmp_path):
+    # man.mdl keeps its textures in manT.mdl: without it loading fails, naming the missing file, as
+    # `sinew convert` does; allow_missing=True loads the model without its textures.
+    alone = tmp_path / "man.mdl"
+    alone.write_bytes((corpus_dir / "mdl/man.mdl").read_bytes())
+    (tmp_path / "man01.mdl").write_bytes((corpus_dir / "mdl/man01.mdl").read_bytes())
+    with pytest.raises(sinew.InputError, match="manT.mdl"):
+        sinew.load(alone)
+    asset = sinew.load(alone, allow_missing=True)
+    whole = sinew.load(corpus_dir / "mdl/man.mdl")
+    assert [c.name for c in asset.clips] == [c.name for c in whole.clips]
+    assert asset.skeleton.names == whole.skeleton.names

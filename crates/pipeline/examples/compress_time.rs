@@ -1,10 +1,12 @@
-//! Times the clip encoder alone, per clip, on one thread: what docs/performance.md compares with
-//! ACL's `acl_compressor` compression time (issue 17, goal 1).
+//! Times the clip encoder alone, per clip: what docs/performance.md compares with ACL's
+//! `acl_compressor` compression time (issues 17 and 29).
 //!
 //! `cargo run --release -p sinew-pipeline --example compress_time -- RUNS FILE...` (corpus-relative
 //! paths or paths on disk). Every clip of each file is compressed RUNS times at the peers' settings
-//! (0.001 units at 0.1 units) inside a one-thread rayon pool; prints per clip the median and fastest
-//! time in milliseconds, the joints x keys and the compressed bytes.
+//! (0.001 units at 0.1 units) inside a rayon pool of one thread (`SINEW_THREADS=N` for N); prints per
+//! clip the median and fastest time in milliseconds, the joints x keys, the compressed bytes and the
+//! max error. `SINEW_EFFORT=fast|max` picks another effort, `SINEW_SETTING=default` the default
+//! (relative) tolerance.
 
 #![allow(clippy::unwrap_used)]
 
@@ -16,12 +18,14 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let runs: usize = args.next().and_then(|r| r.parse().ok()).unwrap_or(5).max(1);
     let files: Vec<String> = args.collect();
+    let threads = std::env::var("SINEW_THREADS")
+        .ok()
+        .and_then(|t| t.parse().ok())
+        .unwrap_or(1);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
+        .num_threads(threads)
         .build()
         .unwrap();
-    // SINEW_EFFORT=fast|max picks another search effort (default: the default).
-    // SINEW_SETTING=default uses the default (relative) tolerance instead of the peers' 0.001 @ 0.1.
     let mut options = if std::env::var("SINEW_SETTING").as_deref() == Ok("default") {
         CompressOptions::default()
     } else {
@@ -32,8 +36,8 @@ fn main() {
         Ok("max") => Effort::Max,
         _ => Effort::Default,
     };
-    println!("| file | clip | joints x keys | bytes | median ms | fastest ms |");
-    println!("|---|---|---|---:|---:|---:|");
+    println!("| file | clip | joints x keys | bytes | median ms | fastest ms | max error |");
+    println!("|---|---|---|---:|---:|---:|---:|");
     for file in files {
         let path = sinew_testdata::corpus_file(&file)
             .filter(|p| p.exists())

@@ -1,32 +1,46 @@
 #!/usr/bin/env bash
-# Compares sinew's LODs with gltfpack's on the same glTF files at the same targets (issue 6).
-# Installs gltfpack from npm into a temporary folder, simplifies each file to 50% and 25% of its
-# triangles (each from the source, no quantisation), then runs examples/lod_compare.rs, which imports
-# the original and gltfpack's outputs with sinew_import and prints triangles reached, Hausdorff
-# distance, posed Hausdorff and sinew's time. gltfpack's time is printed here (whole process).
+# sinew's LODs against native gltfpack at equal triangle counts, per mesh, at rest and posed
+# (issue 30; docs/lod.md, "Against gltfpack at equal triangle counts").
 #
-# usage: tools/lod-compare.sh [FILE.glb ...]   (default: CesiumMan.glb and Fox.glb of the corpus)
+# Every input that is not glTF is exported first (`sinew export FILE -o FILE.glb`): that file is
+# the reference for both tools. crates/pipeline/examples/lod_peers.rs then runs gltfpack (`-si 0.5`
+# and `-si 0.25`, each with and without `-sa`, always `-kn -noq`), builds sinew's default chain and
+# its chain at gltfpack's counts, and prints one JSON line per mesh and level; tools/lod-table.py
+# turns them into the tables of docs/lod.md.
+#
+# usage: GLTFPACK=/path/to/gltfpack tools/lod-compare.sh OUT.jsonl [FILE ...]
+#   (default files: the corpus meshes and fixtures of docs/lod.md; GLTFPACK defaults to the
+#   peers' build, /work/peers/gltfpack-build/gltfpack)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 corpus="${SINEW_CORPUS:-$root/../shared/corpus}"
+gltfpack="${GLTFPACK:-/work/peers/gltfpack-build/gltfpack}"
+out="${1:?usage: tools/lod-compare.sh OUT.jsonl [FILE ...]}"
+shift
 if [ "$#" -eq 0 ]; then
-  set -- "$corpus/gltf/CesiumMan.glb" "$corpus/gltf/Fox.glb"
+  set -- "$root/fixtures/thin.gltf" "$root/fixtures/parts.gltf" "$root/fixtures/biped.gltf" \
+    "$corpus/gltf/CesiumMan.glb" "$corpus/gltf/Fox.glb" "$corpus/gltf/RiggedFigure.glb" \
+    "$corpus/gltf/RiggedSimple.glb" "$corpus/ms3d/ninja.ms3d" "$corpus/ms3d/zombie.ms3d" \
+    "$corpus/ms3d/zombie02.ms3d" "$corpus/ms3d/jeep1.ms3d" "$corpus/ms3d/Wuson.ms3d" \
+    "$corpus/ms3d/twospheres_withmats.ms3d" "$corpus/ms3d/animated_cylinder.ms3d" \
+    "$corpus/ms3d/cross.ms3d" "$corpus/obj/spot.obj" "$corpus/obj/spider.obj" \
+    "$corpus/obj/regr01.obj" "$corpus/obj/cornell_box.obj" "$corpus/mdl/man.mdl" \
+    "$corpus/mdl/chrome_sphere.mdl" "$corpus/smd/holy_grailref.smd" "$corpus/smd/WusonSMD.smd"
 fi
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-npm install --silent --prefix "$tmp" gltfpack@1.3.0 >/dev/null
-gltfpack="$tmp/node_modules/.bin/gltfpack"
-cargo build --quiet --release -p sinew-pipeline --example lod_compare
+cargo build --quiet --release -p sinew-cli -p sinew-pipeline --example lod_peers
+inputs=()
 for input in "$@"; do
-  base="$(basename "${input%.*}")"
-  outs=()
-  for ratio in 0.5 0.25; do
-    out="$tmp/${base}_gltfpack_${ratio}.glb"
-    start=$(date +%s%N)
-    "$gltfpack" -i "$input" -o "$out" -si "$ratio" -noq >/dev/null
-    end=$(date +%s%N)
-    echo "gltfpack -si $ratio $base: $(( (end - start) / 1000000 )) ms (whole process)"
-    outs+=("$out")
-  done
-  "$root/target/release/examples/lod_compare" "$input" "${outs[@]}"
+  case "$input" in
+    *.glb|*.gltf) inputs+=("$input") ;;
+    *)
+      b="$(basename "$input")"
+      glb="$tmp/${b%.*}_${b##*.}.glb"
+      "$root/target/release/sinew" -q export "$input" -o "$glb"
+      inputs+=("$glb") ;;
+  esac
 done
+"$root/target/release/examples/lod_peers" --gltfpack "$gltfpack" \
+  --pose-at 0.125 --pose-at 0.25 --pose-at 0.5 --pose-at 0.75 "${inputs[@]}" > "$out"
+echo "wrote $out ($(wc -l < "$out") rows)"

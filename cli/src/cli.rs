@@ -143,9 +143,10 @@ pub struct LodArgs {
     /// LOD ratios of LOD 0's triangles, decreasing (`0.5,0.25`), or `none` for no LODs.
     #[arg(long, value_name = "R1,R2|none", default_value = "0.5,0.25")]
     pub lod: String,
-    /// Largest simplification error, relative to the mesh extent.
-    #[arg(long, value_name = "E", default_value_t = sinew_pipeline::lod::DEFAULT_MAX_ERROR)]
-    pub lod_max_error: f32,
+    /// Largest simplification error, relative to the mesh extent, accumulated along the chain
+    /// (default: none; each LOD meets its triangle budget and reports the error it reached).
+    #[arg(long, value_name = "E")]
+    pub lod_max_error: Option<f32>,
     /// Influences per vertex kept in the lowest LOD (1 to 4).
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub lod_influences: usize,

@@ -544,7 +544,7 @@ pub fn lod_spec_options(
     spec.map(|spec| {
         lod_options(&crate::cli::LodArgs {
             lod: spec.to_string(),
-            lod_max_error: sinew_pipeline::lod::DEFAULT_MAX_ERROR,
+            lod_max_error: None,
             lod_influences: 4,
         })
     })

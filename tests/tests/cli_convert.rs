@@ -154,14 +154,38 @@ fn batch_over_corpus_converts_good_files_and_lists_every_bad_one() {
             );
             assert!((a - b).abs() < 1e-4, "{ctx}: duration {a} vs {b}");
         }
-        for m in arr(&got["meshes"]) {
+        // Every mesh's two levels are written or reported as not built, in order; the file
+        // holds the written ones.
+        for (m, r) in arr(&got["meshes"]).iter().zip(arr(&f["meshes"])) {
             if m["triangles"].as_u64().unwrap() > 0 {
                 let lods = arr(&m["lods"]);
-                assert_eq!(lods.len(), 2, "{ctx}: LODs of {}", m["name"]);
-                assert_eq!(lods[0]["target_ratio"], 0.5);
-                assert_eq!(lods[1]["target_ratio"], 0.25);
-                let t0 = m["triangles"].as_u64().unwrap();
-                assert!(lods[1]["triangles"].as_u64().unwrap() <= t0, "{ctx}");
+                let not_built = arr(&r["lods_not_built"]);
+                assert_eq!(lods.len(), arr(&r["lods"]).len(), "{ctx}: {}", m["name"]);
+                assert_eq!(
+                    lods.len() + not_built.len(),
+                    2,
+                    "{ctx}: LODs of {}",
+                    m["name"]
+                );
+                let ratios: Vec<f64> = lods
+                    .iter()
+                    .chain(not_built)
+                    .map(|l| l["target_ratio"].as_f64().unwrap())
+                    .collect();
+                assert_eq!(ratios, [0.5, 0.25], "{ctx}");
+                let mut previous = m["triangles"].as_u64().unwrap();
+                for l in lods {
+                    let t = l["triangles"].as_u64().unwrap();
+                    assert!(t < previous, "{ctx}: {t} after {previous}");
+                    previous = t;
+                }
+                for n in not_built {
+                    assert!(
+                        ["no-collapse", "previous-not-built"]
+                            .contains(&n["reason"].as_str().unwrap()),
+                        "{ctx}: {n}"
+                    );
+                }
             }
         }
     }
@@ -762,4 +786,68 @@ fn help_of_new_commands_has_examples() {
     ] {
         assert!(run.stdout.contains(o), "convert --help lacks {o}");
     }
+}
+
+/// A level that cannot remove half of the triangles it asks for is not written; the JSON and the
+/// human report say which and why (here an error limit far below what the biped's LODs need).
+#[test]
+fn levels_not_built_are_reported_instead_of_written_as_copies() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b.sinew");
+    let input = biped();
+    let args: Vec<&std::ffi::OsStr> = vec![
+        input.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--lod-max-error".as_ref(),
+        "0.00001".as_ref(),
+    ];
+    let (code, report, stderr) = convert_json(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let mesh = &arr(&report["files"])[0]["meshes"][0];
+    assert!(arr(&mesh["lods"]).is_empty(), "{mesh}");
+    let not_built = arr(&mesh["lods_not_built"]);
+    assert_eq!(not_built.len(), 2);
+    assert_eq!(not_built[0]["level"], 1);
+    assert_eq!(not_built[0]["reason"], "error-limit");
+    assert_eq!(not_built[0]["previous_triangles"], 756);
+    assert!(not_built[0]["reached_triangles"].as_u64().unwrap() > 567);
+    assert_eq!(not_built[1]["reason"], "previous-not-built");
+    assert!(not_built[1]["reached_triangles"].is_null());
+    assert!(arr(&inspect_json(&out, &[])["meshes"][0]["lods"]).is_empty());
+    // The default: no limit, both levels written at their budgets.
+    let (code, report, stderr) = convert_json(&[input.as_os_str(), "-o".as_ref(), out.as_os_str()]);
+    assert_eq!(code, 0, "{stderr}");
+    let mesh = &arr(&report["files"])[0]["meshes"][0];
+    assert!(arr(&mesh["lods_not_built"]).is_empty());
+    let t: Vec<u64> = arr(&mesh["lods"])
+        .iter()
+        .map(|l| l["triangles"].as_u64().unwrap())
+        .collect();
+    assert!(t[0].abs_diff(378) <= 2 && t[1].abs_diff(189) <= 2, "{t:?}");
+    assert!(arr(&mesh["lods"])
+        .iter()
+        .all(|l| l["stopped_by_error_limit"] == false));
+}
+
+#[test]
+fn the_human_report_names_levels_not_built() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b.sinew");
+    let run = sinew([
+        Path::new("convert"),
+        &biped(),
+        Path::new("-o"),
+        &out,
+        Path::new("--lod-max-error"),
+        Path::new("0.00001"),
+    ]);
+    assert_eq!(run.code, 0, "{}", run.stderr);
+    assert!(
+        run.stderr
+            .contains("LOD 1 not built (error-limit: stopped at")
+            && run.stderr.contains("LOD 2 not built (previous-not-built)"),
+        "{}",
+        run.stderr
+    );
 }

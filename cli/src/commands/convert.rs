@@ -11,7 +11,8 @@ use crate::incremental;
 use crate::output::{check_output_path, write_atomic, Ctx};
 use crate::report::{
     clip_report, diag_report, mesh_report, num, strict_error, warning_pairs, ClipOut, ClipTiming,
-    ConvertReport, FileReport, IncrementalReport, MeshOut, MeshTimings, OutputDetails, Timings,
+    ConvertReport, FileReport, IncrementalReport, MeshOut, MeshTimings, NotBuiltReport,
+    OutputDetails, Timings,
 };
 use crate::report::{MotionReport, SplitReport};
 use crate::steps::{self, MappingFile, SplitPlan};
@@ -24,7 +25,7 @@ use sinew_pipeline::compile::{
 use sinew_pipeline::compress::CompressOptions;
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
-use sinew_scene::{Scene, SceneClip};
+use sinew_scene::{NotBuiltReason, Scene, SceneClip};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -53,6 +54,7 @@ pub fn details(
                     vertices: r.vertices,
                     triangles: r.triangles,
                     lods: r.lods,
+                    lods_not_built: m.lods_not_built.iter().map(not_built_report).collect(),
                 }
             })
             .collect(),
@@ -78,6 +80,21 @@ pub fn details(
         diagnostics: scene.diagnostics.iter().map(diag_report).collect(),
         textures: Vec::new(),
         timings: None,
+    }
+}
+
+/// The report of a LOD level not built.
+fn not_built_report(n: &sinew_scene::NotBuiltLod) -> NotBuiltReport {
+    NotBuiltReport {
+        level: n.level,
+        target_ratio: n.target_ratio,
+        previous_triangles: n.previous_triangles,
+        reached_triangles: n.reached_triangles,
+        reason: match n.reason {
+            NotBuiltReason::ErrorLimit => "error-limit",
+            NotBuiltReason::NoCollapse => "no-collapse",
+            NotBuiltReason::PreviousNotBuilt => "previous-not-built",
+        },
     }
 }
 
@@ -781,7 +798,7 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
         d.clips.len()
     );
     for m in &d.meshes {
-        if m.lods.is_empty() {
+        if m.lods.is_empty() && m.lods_not_built.is_empty() {
             continue;
         }
         let lods: Vec<String> = m
@@ -793,20 +810,37 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
                     l.triangles,
                     num(l.reached_ratio),
                     num(l.error_relative),
-                    if l.stopped_by_error_limit {
-                        " stopped by error limit"
-                    } else {
-                        ""
+                    match (l.stopped_by_error_limit, l.uv_seams_opened) {
+                        (true, true) => " stopped by error limit, UV seams opened",
+                        (true, false) => " stopped by error limit",
+                        (false, true) => " UV seams opened",
+                        (false, false) => "",
                     }
                 )
             })
             .collect();
+        let not_built: Vec<String> = m
+            .lods_not_built
+            .iter()
+            .map(|n| match n.reached_triangles {
+                Some(r) => format!(
+                    "LOD {} not built ({}: stopped at {} of {} triangles)",
+                    n.level, n.reason, r, n.previous_triangles
+                ),
+                None => format!("LOD {} not built ({})", n.level, n.reason),
+            })
+            .collect();
         let _ = writeln!(
             o,
-            "  mesh \"{}\": {} triangles; LODs: {}",
+            "  mesh \"{}\": {} triangles; LODs: {}{}",
             m.name,
             m.triangles,
-            lods.join("; ")
+            lods.join("; "),
+            if not_built.is_empty() {
+                String::new()
+            } else {
+                format!("; {}", not_built.join("; "))
+            }
         );
     }
     for c in &d.clips {

@@ -303,6 +303,7 @@ pub fn mesh_report(m: &sinew_scene::Mesh) -> MeshReport {
                 error_relative: l.error_relative,
                 error_model: l.error_model,
                 stopped_by_error_limit: l.stopped_by_error_limit,
+                uv_seams_opened: l.uv_seams_opened,
             })
             .collect(),
     }

@@ -298,7 +298,8 @@ pub struct MeshTimings {
     pub mesh: String,
     /// Vertex-cache optimisation of LOD 0.
     pub optimize_ms: f64,
-    /// Each generated LOD (simplification, repair, error measurement), LOD 1 first.
+    /// Each LOD level tried (simplification, repair, error measurement), LOD 1 first: the
+    /// generated ones, then a level not built when simplification was tried for it.
     pub levels_ms: Vec<f64>,
 }
 
@@ -322,6 +323,23 @@ pub struct MeshOut {
     pub triangles: usize,
     /// Generated LODs, most detailed first (same fields as `inspect`).
     pub lods: Vec<LodReport>,
+    /// LOD levels asked for and not written, and why.
+    pub lods_not_built: Vec<NotBuiltReport>,
+}
+
+/// A LOD level that was asked for and not written (instead of a copy of the level before it).
+#[derive(Debug, Serialize)]
+pub struct NotBuiltReport {
+    /// The level it would have had.
+    pub level: usize,
+    /// Requested fraction of LOD 0's triangles.
+    pub target_ratio: f32,
+    /// Triangles of the level it would have been simplified from.
+    pub previous_triangles: usize,
+    /// Triangles simplification stopped at; `null` when it was not attempted.
+    pub reached_triangles: Option<usize>,
+    /// `error-limit`, `no-collapse` or `previous-not-built`.
+    pub reason: &'static str,
 }
 
 /// One clip of the output.

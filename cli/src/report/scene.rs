@@ -307,6 +307,9 @@ pub struct LodReport {
     pub error_model: f32,
     /// Whether the error limit stopped simplification before the target.
     pub stopped_by_error_limit: bool,
+    /// Whether the level could only be built by letting collapses cross UV seams (always false
+    /// when read from a `.sinew` file, which does not store it).
+    pub uv_seams_opened: bool,
 }
 
 /// A material.

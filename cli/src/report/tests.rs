@@ -78,6 +78,7 @@ fn scene() -> Scene {
         source_vertex: vec![0, 1, 2],
         source_vertex_count: 3,
         lods: Vec::new(),
+        lods_not_built: Vec::new(),
     });
     s.diagnostics
         .push(Diagnostic::warning("odd-thing", "Something odd.").with_figure("count", 3.0));

@@ -673,6 +673,7 @@ fn build_mesh(
         source_vertex,
         source_vertex_count: positions.len() as u32,
         lods: Vec::new(),
+        lods_not_built: Vec::new(),
     }
 }
 

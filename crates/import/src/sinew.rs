@@ -62,6 +62,7 @@ pub fn scene_from_asset(asset: Asset) -> Scene {
                     reached_ratio: info.reached_ratio,
                     error_model: info.error_model,
                     stopped_by_error_limit: info.stopped_by_error_limit,
+                    uv_seams_opened: false,
                 }
             })
             .collect();
@@ -75,6 +76,7 @@ pub fn scene_from_asset(asset: Asset) -> Scene {
             source_vertex,
             source_vertex_count,
             lods: generated,
+            lods_not_built: Vec::new(),
         });
     }
     scene.materials = asset

@@ -24,20 +24,30 @@
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning, DEFAULT_MAX_ERROR};
+use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::Path;
 use std::time::Instant;
 
+/// A mesh's LOD at `level` (None: LOD 0); a mesh without that level (not built) gives the last
+/// level it has, which is what the runtime draws there.
+fn level_of(m: &sinew_scene::Mesh, level: Option<usize>) -> &Lod {
+    match level {
+        None => &m.geometry,
+        Some(k) => m
+            .lods
+            .get(k)
+            .or(m.lods.last())
+            .map_or(&m.geometry, |g| &g.lod),
+    }
+}
+
 /// All meshes of a LOD level (None: LOD 0) as one soup, optionally posed by `palette`.
 fn soup(scene: &Scene, level: Option<usize>, palette: Option<&[Mat4]>) -> (Vec<Vec3>, Vec<u32>) {
     let (mut p, mut i) = (Vec::new(), Vec::new());
     for m in &scene.meshes {
-        let lod: &Lod = match level {
-            None => &m.geometry,
-            Some(k) => &m.lods[k].lod,
-        };
+        let lod = level_of(m, level);
         let base = p.len() as u32;
         match palette {
             Some(pal) if lod.is_skinned() => {
@@ -104,10 +114,7 @@ fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     scene
         .meshes
         .iter()
-        .map(|m| match level {
-            None => m.geometry.triangle_count(),
-            Some(k) => m.lods[k].lod.triangle_count(),
-        })
+        .map(|m| level_of(m, level).triangle_count())
         .sum()
 }
 
@@ -195,7 +202,7 @@ fn main() {
     let sinew_tuned = |ratios: Vec<f32>,
                        label: &str,
                        tuning: LodTuning,
-                       max_error: f32|
+                       max_error: Option<f32>|
      -> Vec<Row> {
         let mut s = scene.clone();
         let lod_options = LodOptions {
@@ -240,9 +247,8 @@ fn main() {
             })
             .collect()
     };
-    let sinew_rows = |ratios: Vec<f32>, label: &str| {
-        sinew_tuned(ratios, label, LodTuning::default(), DEFAULT_MAX_ERROR)
-    };
+    let sinew_rows =
+        |ratios: Vec<f32>, label: &str| sinew_tuned(ratios, label, LodTuning::default(), None);
     if others.first().map(String::as_str) == Some("--sweep") {
         // The quality knobs one at a time against the defaults (docs/lod.md).
         let d = LodTuning::default();
@@ -251,44 +257,24 @@ fn main() {
             f(&mut t);
             t
         };
-        let variants: Vec<(&str, LodTuning, f32)> = vec![
-            ("default", d, DEFAULT_MAX_ERROR),
+        let variants: Vec<(&str, LodTuning, Option<f32>)> = vec![
+            ("default", d, None),
             (
-                "no-part-locks",
-                with(&|t| t.lock_part_extremes = false),
-                DEFAULT_MAX_ERROR,
+                "no-part-anchors",
+                with(&|t| t.anchor_part_extremes = false),
+                None,
             ),
-            (
-                "no-repair",
-                with(&|t| t.repair_far_vertices = false),
-                DEFAULT_MAX_ERROR,
-            ),
-            (
-                "not-permissive",
-                with(&|t| t.permissive = false),
-                DEFAULT_MAX_ERROR,
-            ),
-            ("from-lod0", with(&|t| t.chain = false), DEFAULT_MAX_ERROR),
-            (
-                "no-regularize",
-                with(&|t| t.regularize = false),
-                DEFAULT_MAX_ERROR,
-            ),
-            ("pose-0", with(&|t| t.pose_weight = 0.0), DEFAULT_MAX_ERROR),
-            ("pose-1", with(&|t| t.pose_weight = 1.0), DEFAULT_MAX_ERROR),
-            ("pose-8", with(&|t| t.pose_weight = 8.0), DEFAULT_MAX_ERROR),
-            (
-                "normal-0",
-                with(&|t| t.normal_weight = 0.0),
-                DEFAULT_MAX_ERROR,
-            ),
-            (
-                "normal-0.5",
-                with(&|t| t.normal_weight = 0.5),
-                DEFAULT_MAX_ERROR,
-            ),
-            ("uv-0", with(&|t| t.uv_weight = 0.0), DEFAULT_MAX_ERROR),
-            ("uv-2", with(&|t| t.uv_weight = 2.0), DEFAULT_MAX_ERROR),
+            ("no-repair", with(&|t| t.repair_far_vertices = false), None),
+            ("not-permissive", with(&|t| t.permissive = false), None),
+            ("from-lod0", with(&|t| t.chain = false), None),
+            ("no-regularize", with(&|t| t.regularize = false), None),
+            ("pose-0", with(&|t| t.pose_weight = 0.0), None),
+            ("pose-1", with(&|t| t.pose_weight = 1.0), None),
+            ("pose-8", with(&|t| t.pose_weight = 8.0), None),
+            ("normal-0", with(&|t| t.normal_weight = 0.0), None),
+            ("normal-0.5", with(&|t| t.normal_weight = 0.5), None),
+            ("uv-0", with(&|t| t.uv_weight = 0.0), None),
+            ("uv-2", with(&|t| t.uv_weight = 2.0), None),
             (
                 "attrs-0",
                 with(&|t| {
@@ -296,7 +282,7 @@ fn main() {
                     t.uv_weight = 0.0;
                     t.pose_weight = 0.0;
                 }),
-                DEFAULT_MAX_ERROR,
+                None,
             ),
             (
                 "previous-default",
@@ -305,10 +291,11 @@ fn main() {
                     t.pose_weight = 1.0;
                     t.permissive = false;
                 }),
-                DEFAULT_MAX_ERROR,
+                None,
             ),
-            ("max-error-0.02", d, 0.02),
-            ("max-error-0.1", d, 0.1),
+            ("per-material", with(&|t| t.whole_mesh = false), None),
+            ("max-error-0.02", d, Some(0.02)),
+            ("max-error-0.1", d, Some(0.1)),
         ];
         let mut rows = Vec::new();
         for (label, tuning, max_error) in variants {

@@ -276,7 +276,9 @@ mod tests {
                 error_relative: 0.25,
                 error_model: 0.5,
                 stopped_by_error_limit: true,
+                uv_seams_opened: false,
             }],
+            lods_not_built: Vec::new(),
         });
         s.materials.push(sinew_scene::Material {
             name: "mat".into(),

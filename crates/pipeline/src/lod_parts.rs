@@ -1,13 +1,14 @@
 //! The parts of a mesh (its connected pieces) and the vertices that give each its shape: what the LOD
-//! builder locks so that a thin or small part is not shortened or swallowed while the whole mesh is
-//! simplified.
+//! builder gives meshoptimizer's `Priority` so that a thin or small part is not shortened or
+//! swallowed while the whole mesh is simplified.
 //!
 //! meshoptimizer ranks collapses by a quadric error that is zero for any collapse inside a plane: the
 //! tip of a flat blade can slide back along the blade at no cost, so on a many-part character the
 //! accessories' tips went first (issue 18: 4.2% of the diagonal on both LODs of a 59-part model, where
-//! gltfpack stays within 0.82%). Locking, per part, the vertices at the ends of its extent along each
-//! axis and the one farthest from its centre keeps every part's reach; the rest of the part still
-//! simplifies.
+//! gltfpack stays within 0.82%). Per part, the vertices at the ends of its extent along each axis and
+//! the one farthest from its centre cost their displacement when moved, whatever the part's size
+//! (issue 30: a size threshold let parts of 12 to 60 triangles lose their tips); the rest of the
+//! part simplifies as before.
 
 use sinew_core::glam::Vec3;
 
@@ -26,12 +27,9 @@ pub(crate) fn position_ids(positions: &[Vec3]) -> (usize, Vec<u32>) {
     meshopt::generate_vertex_remap(&keys, None)
 }
 
-/// Parts with fewer triangles get no locks.
-const SMALL_PART: usize = 64;
-
 /// Per vertex: true when it sits (bit for bit) at one of its part's extreme positions — the lowest
 /// and highest along x, y and z, and the farthest from the centre of the part's bounding box — in
-/// every part of at least [`SMALL_PART`] triangles. Parts
+/// every part, whatever its size. Parts
 /// are the sets of triangles connected through shared positions (vertices split for UV or normal
 /// seams belong to one part). Indices must be valid for `positions`.
 pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
@@ -102,24 +100,13 @@ pub(crate) fn part_extremes(positions: &[Vec3], indices: &[u32]) -> Vec<bool> {
             *f = (d, id);
         }
     }
-    // Triangles per part: small parts are left to meshoptimizer, so that a mesh of many small
-    // pieces can still reach its targets (the biped fixture, 21 tubes of 36 triangles, stopped at
-    // 0.34 of its triangles instead of 0.25 with seven locks per tube, and at 0.27 with two).
-    let mut tris = vec![0usize; at.len()];
-    for t in indices.chunks_exact(3) {
-        tris[root(&mut parent, id_of[t[0] as usize]) as usize] += 1;
-    }
-    for (r, e) in lo_hi.iter().enumerate() {
-        let Some(e) = e else { continue };
-        if tris[r] < SMALL_PART {
-            continue;
-        }
+    for e in lo_hi.iter().flatten() {
         for &id in e {
             locked[id as usize] = true;
         }
-        if let Some((_, id)) = far[r] {
-            locked[id as usize] = true;
-        }
+    }
+    for (_, id) in far.iter().flatten() {
+        locked[*id as usize] = true;
     }
     id_of.iter().map(|&id| locked[id as usize]).collect()
 }
@@ -164,11 +151,15 @@ mod tests {
         assert!(locked[0] && locked[1], "base");
         assert!(locked[80] || locked[81], "tip");
         assert!((4..76).all(|v| !locked[v]), "{locked:?}");
-        // The square is its own part, small (2 triangles): no locks.
-        assert!(locked[82..].iter().all(|&l| !l), "{:?}", &locked[82..]);
-        // The small blade (20 triangles): no locks at all.
+        // The square is its own part, of two triangles: its extremes too (three of its corners:
+        // the fourth is no axis's first end and ties for the farthest).
+        assert_eq!(&locked[82..], &[true, true, true, false]);
+        // The small blade (20 triangles): its base and tip too, and nothing in between.
         let (p, idx) = blade_and_square();
-        assert!(part_extremes(&p, &idx).iter().all(|&l| !l));
+        let locked = part_extremes(&p, &idx);
+        assert!(locked[0] && locked[1], "base");
+        assert!(locked[20] || locked[21], "tip");
+        assert!((4..16).all(|v| !locked[v]), "{locked:?}");
     }
 
     #[test]

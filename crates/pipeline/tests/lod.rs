@@ -4,7 +4,7 @@
 use sinew_core::glam::{Quat, Vec2, Vec3};
 use sinew_core::{JointDesc, Lod, Skeleton, Submesh, Transform};
 use sinew_pipeline::lod::{build_lods, generate_lods, LodOptions};
-use sinew_scene::{Mesh, Scene, SourceFormat};
+use sinew_scene::{Mesh, NotBuiltReason, Scene, SourceFormat};
 use sinew_testdata::geometry::*;
 
 /// A tube along +Y, 40 rings of 32 vertices, two joints (lower half / upper half, blended in the middle),
@@ -73,6 +73,7 @@ fn tube() -> (Scene, usize) {
         source_vertex: (0..n).collect(),
         source_vertex_count: n,
         lods: Vec::new(),
+        lods_not_built: Vec::new(),
     });
     (scene, tris)
 }
@@ -106,11 +107,7 @@ fn check_lod_invariants(base: &Lod, lod: &Lod) {
 fn tube_reaches_targets_keeps_materials_and_stays_close() {
     let (mut scene, tris) = tube();
     assert_eq!(tris, 2560);
-    let options = LodOptions {
-        max_error: 1.0,
-        ..Default::default()
-    };
-    let reports = generate_lods(&mut scene, &options).unwrap();
+    let reports = generate_lods(&mut scene, &LodOptions::default()).unwrap();
     let mesh = &scene.meshes[0];
     let base = &mesh.geometry;
     assert_eq!(reports[0].lods.len(), 2);
@@ -143,14 +140,7 @@ fn tube_reaches_targets_keeps_materials_and_stays_close() {
 #[test]
 fn posed_lod_stays_close_to_posed_base() {
     let (mut scene, _) = tube();
-    generate_lods(
-        &mut scene,
-        &LodOptions {
-            max_error: 1.0,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    generate_lods(&mut scene, &LodOptions::default()).unwrap();
     let skeleton = scene.skeleton.as_ref().unwrap();
     let mut locals = skeleton.bind_local().to_vec();
     locals[1].rotation = Quat::from_rotation_z(1.0);
@@ -170,19 +160,91 @@ fn posed_lod_stays_close_to_posed_base() {
 fn error_limit_stops_early_and_says_so() {
     let (scene, tris) = tube();
     let mesh = &scene.meshes[0];
-    let lods = build_lods(
+    // A limit far below what 5% of the triangles needs: the level stops before removing half of
+    // what it asks, so it is not written; the report names the limit.
+    let chain = build_lods(
         mesh,
         scene.skeleton.as_ref(),
         &LodOptions {
-            ratios: vec![0.05],
-            max_error: 1e-5,
+            ratios: vec![0.05, 0.01],
+            max_error: Some(1e-5),
             lowest_lod_influences: 4,
         },
     )
     .unwrap();
-    assert!(lods[0].stopped_by_error_limit);
-    assert!(lods[0].lod.triangle_count() > tris / 20 + 2);
-    assert!(lods[0].error_relative <= 1e-5);
+    assert!(chain.lods.is_empty());
+    assert_eq!(chain.not_built.len(), 2);
+    let first = &chain.not_built[0];
+    assert_eq!((first.level, first.previous_triangles), (1, tris));
+    assert_eq!(first.reason, NotBuiltReason::ErrorLimit);
+    let reached = first.reached_triangles.unwrap();
+    assert!(2 * reached > tris + tris / 20, "{reached}");
+    assert_eq!(chain.not_built[1].reason, NotBuiltReason::PreviousNotBuilt);
+    assert_eq!(chain.not_built[1].reached_triangles, None);
+    // Without a limit the same level meets its budget.
+    let free = build_lods(
+        mesh,
+        scene.skeleton.as_ref(),
+        &LodOptions {
+            ratios: vec![0.05],
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(free.not_built.is_empty());
+    let got = free.lods[0].lod.triangle_count();
+    assert!(got.abs_diff(tris / 20) <= 2, "{got}");
+    assert!(!free.lods[0].stopped_by_error_limit);
+}
+
+/// A box whose six faces are six materials, each face with its own four vertices: every corner is
+/// a border of three material ranges, which meshoptimizer keeps in place, so no collapse is left
+/// and the level would be a copy.
+#[test]
+fn a_level_that_would_be_a_copy_is_not_built() {
+    let corner = |i: u32| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
+    // Faces as corner numbers, counter-clockwise seen from outside.
+    let faces: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut geometry = Lod::default();
+    for (f, face) in faces.iter().enumerate() {
+        let base = geometry.positions.len() as u32;
+        let [a, b, c] = [0, 1, 2].map(|k| corner(face[k]));
+        let n = (b - a).cross(c - a).normalize();
+        for &v in face {
+            geometry.positions.push(corner(v));
+            geometry.normals.push(n);
+        }
+        geometry.submeshes.push(Submesh {
+            first_index: geometry.indices.len() as u32,
+            index_count: 6,
+            material: format!("face{f}"),
+        });
+        geometry
+            .indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    let mesh = Mesh {
+        name: "box".into(),
+        geometry,
+        ..Mesh::default()
+    };
+    let chain = build_lods(&mesh, None, &LodOptions::default()).unwrap();
+    assert!(chain.lods.is_empty(), "{} LODs", chain.lods.len());
+    let reasons: Vec<NotBuiltReason> = chain.not_built.iter().map(|n| n.reason).collect();
+    assert_eq!(
+        reasons,
+        [NotBuiltReason::NoCollapse, NotBuiltReason::PreviousNotBuilt]
+    );
+    assert_eq!(chain.not_built[0].previous_triangles, 12);
+    assert_eq!(chain.not_built[0].target_ratio, 0.5);
+    assert_eq!(chain.not_built[0].reached_triangles, Some(12));
 }
 
 #[test]
@@ -198,11 +260,12 @@ fn lowest_lod_influences_are_cut_and_renormalised() {
         scene.skeleton.as_ref(),
         &LodOptions {
             ratios: vec![0.5, 0.25],
-            max_error: 1.0,
+            max_error: None,
             lowest_lod_influences: 2,
         },
     )
-    .unwrap();
+    .unwrap()
+    .lods;
     for w in &lods[1].lod.weights {
         assert_eq!(w[2], 0.0);
         assert!(

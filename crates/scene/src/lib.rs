@@ -162,8 +162,40 @@ pub struct GeneratedLod {
     pub error_relative: f32,
     /// Simplifier error in model units.
     pub error_model: f32,
-    /// True when the error limit stopped the simplifier before the target.
+    /// True when an error limit was given and it stopped the simplifier before the target.
     pub stopped_by_error_limit: bool,
+    /// True when the level could only be built by letting collapses cross UV seams (some of its
+    /// triangles may join two UV charts); not stored in `.sinew` files.
+    pub uv_seams_opened: bool,
+}
+
+/// Why a LOD level was not built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotBuiltReason {
+    /// Simplification stopped before removing half of the triangles this level asks of the
+    /// previous one, because of the error limit given.
+    ErrorLimit,
+    /// Simplification stopped before removing half of the triangles this level asks of the
+    /// previous one: no collapse was left that the simplifier may make (UV and material seams
+    /// and locked vertices hold the rest).
+    NoCollapse,
+    /// An earlier level was not built (each level is simplified from the one before).
+    PreviousNotBuilt,
+}
+
+/// A LOD level that was asked for and not written, instead of a copy of the level before it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NotBuiltLod {
+    /// The level it would have had (1 for the first generated LOD).
+    pub level: usize,
+    /// Requested fraction of LOD 0's triangles.
+    pub target_ratio: f32,
+    /// Triangles of the level it would have been simplified from.
+    pub previous_triangles: usize,
+    /// Triangles simplification stopped at (`None` when it was not attempted).
+    pub reached_triangles: Option<usize>,
+    /// Why it was not built.
+    pub reason: NotBuiltReason,
 }
 
 /// A mesh: LOD 0 as imported, the map back to the source's vertices, and generated LODs.
@@ -179,6 +211,9 @@ pub struct Mesh {
     pub source_vertex_count: u32,
     /// Generated lower-detail versions, most detailed first.
     pub lods: Vec<GeneratedLod>,
+    /// Levels asked for that the LOD builder did not write (`lods` holds the levels before the
+    /// first of them); not stored in `.sinew` files.
+    pub lods_not_built: Vec<NotBuiltLod>,
 }
 
 /// An animation clip as importers produce it: linear curves per joint name, absolute local transforms.

@@ -428,6 +428,7 @@ pub(super) fn import_meshes(
             source_vertex: (0..count).collect(),
             source_vertex_count: count,
             lods: Vec::new(),
+            lods_not_built: Vec::new(),
         });
     }
     if generated_normals > 0 {

@@ -425,6 +425,7 @@ fn build_mesh(
         source_vertex,
         source_vertex_count: base as u32,
         lods: Vec::new(),
+        lods_not_built: Vec::new(),
     }
 }
 

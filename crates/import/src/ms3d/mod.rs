@@ -419,5 +419,6 @@ fn build_mesh(
         source_vertex,
         source_vertex_count: file.vertices.len() as u32,
         lods: Vec::new(),
+        lods_not_built: Vec::new(),
     })
 }

@@ -1,34 +1,10 @@
 //! Unit tests of the LOD builder's private helpers.
+use super::step::vertex_flags;
+use super::weld::submesh_of;
 use super::*;
+use meshopt::SimplifyVertex;
 use sinew_core::glam::{Vec2, Vec3};
-
-#[test]
-fn irrelevant_below_is_the_largest_distance_that_cannot_raise_the_error() {
-    let mut s = 0x9e37_79b9u32;
-    let mut rnd = || {
-        s ^= s << 13;
-        s ^= s >> 17;
-        s ^= s << 5;
-        s as f32 / u32::MAX as f32
-    };
-    let mut tight = 0;
-    for _ in 0..10_000 {
-        let accumulated = rnd() * 0.05;
-        let scale = 0.01 + rnd() * 500.0;
-        let floor = irrelevant_below(accumulated, scale);
-        assert!(floor > 0.0, "{accumulated} {scale}");
-        assert!(floor / scale * MEASURE_MARGIN <= accumulated);
-        // The next float up would raise the error: the floor is as high as it can be.
-        let next = f32::from_bits(floor.to_bits() + 1);
-        assert!(next / scale * MEASURE_MARGIN > accumulated);
-        tight += 1;
-    }
-    assert_eq!(tight, 10_000);
-    assert_eq!(irrelevant_below(0.0, 2.0), 0.0);
-    assert_eq!(irrelevant_below(0.01, 0.0), 0.0);
-    assert_eq!(irrelevant_below(f32::NAN, 2.0), 0.0);
-    assert_eq!(irrelevant_below(f32::INFINITY, 2.0), 0.0);
-}
+use sinew_core::Submesh;
 
 /// Two quads side by side in two submeshes, sharing the middle edge's positions; the left
 /// quad's right corners come twice: at the top with another normal only (a hard edge), at
@@ -101,5 +77,5 @@ fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
         PROTECT, // 12: a UV seam
         PROTECT, // 13
     ];
-    assert_eq!(vertex_flags(&lod), expected);
+    assert_eq!(vertex_flags(&lod, &submesh_of(&lod), true, false), expected);
 }

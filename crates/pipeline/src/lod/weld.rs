@@ -1,4 +1,5 @@
-//! Welding before a simplification step: vertices equal in every attribute are merged, and a
+//! Welding before a simplification step: vertices equal in every attribute (and used by the same
+//! submesh) are merged, a vertex used by several submeshes is given one copy per submesh, and a
 //! flat-shaded triangle soup (every corner its own vertex) is welded without its normals and rebuilt
 //! flat after the step, so that meshoptimizer can collapse it at all.
 
@@ -27,13 +28,77 @@ pub(super) fn is_flat_soup(lod: &Lod) -> bool {
     })
 }
 
+/// The submesh of every vertex: the first material range (in order) whose triangles use it
+/// (`u32::MAX` for a vertex no triangle uses; 0 for every used vertex of a mesh without ranges).
+pub(super) fn submesh_of(lod: &Lod) -> Vec<u32> {
+    let mut of = vec![u32::MAX; lod.positions.len()];
+    if lod.submeshes.is_empty() {
+        for &i in &lod.indices {
+            of[i as usize] = 0;
+        }
+        return of;
+    }
+    for (s, sub) in lod.submeshes.iter().enumerate() {
+        let range = sub.first_index as usize..(sub.first_index + sub.index_count) as usize;
+        for &i in &lod.indices[range] {
+            let o = &mut of[i as usize];
+            if *o == u32::MAX {
+                *o = s as u32;
+            }
+        }
+    }
+    of
+}
+
+/// Gives every vertex that triangles of several submeshes use one copy per submesh (appended, in
+/// order of first use), so that each vertex belongs to one material range; `None` when no vertex
+/// is shared. `lod` must be valid.
+pub(super) fn split_shared(lod: &Lod) -> Option<Lod> {
+    let of = submesh_of(lod);
+    let mut out: Option<Lod> = None;
+    // (vertex, submesh) -> copy, for the copies made so far (few: sorted vector, searched).
+    let mut copies: Vec<((u32, u32), u32)> = Vec::new();
+    for (s, sub) in lod.submeshes.iter().enumerate() {
+        let s = s as u32;
+        for at in sub.first_index as usize..(sub.first_index + sub.index_count) as usize {
+            let v = lod.indices[at];
+            if of[v as usize] == s {
+                continue;
+            }
+            let o = out.get_or_insert_with(|| lod.clone());
+            let copy = match copies.binary_search_by_key(&(v, s), |c| c.0) {
+                Ok(k) => copies[k].1,
+                Err(k) => {
+                    let n = o.positions.len() as u32;
+                    let v = v as usize;
+                    o.positions.push(lod.positions[v]);
+                    o.normals.push(lod.normals[v]);
+                    if let Some(uv) = lod.uvs.get(v) {
+                        o.uvs.push(*uv);
+                    }
+                    if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {
+                        o.joints.push(*j);
+                        o.weights.push(*w);
+                    }
+                    copies.insert(k, ((v as u32, s), n));
+                    n
+                }
+            };
+            o.indices[at] = copy;
+        }
+    }
+    out
+}
+
 /// Merges vertices that are bit-for-bit equal in position, UV, joints and weights (and normal, unless
-/// `ignore_normals`), with meshoptimizer's `generateVertexRemap`. Lossless when normals count; with
+/// `ignore_normals`) and used by the same submesh, with meshoptimizer's `generateVertexRemap`, and
+/// drops triangles with two corners at one position. Lossless when normals count; with
 /// `ignore_normals` the merged vertices get area-weighted normals of the welded surface (used only as
 /// a simplification attribute; [`flat_soup`] rebuilds face normals afterwards). `lod` must be valid.
 pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
-    const KEY: usize = 16;
+    const KEY: usize = 15;
     let n = lod.positions.len();
+    let of = submesh_of(lod);
     let mut keys = vec![[0u32; KEY]; n];
     for (v, k) in keys.iter_mut().enumerate() {
         let p = lod.positions[v];
@@ -52,6 +117,7 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
                 k[10 + slot] = x.to_bits();
             }
         }
+        k[14] = of[v];
     }
     // Indices were validated against `n` (validate_lod), as generateVertexRemap requires.
     let (unique, remap) = meshopt::generate_vertex_remap(&keys, Some(&lod.indices));
@@ -64,8 +130,40 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
         }
     }
     let pick = |f: &u32| *f as usize;
-    let indices: Vec<u32> = lod.indices.iter().map(|&i| remap[i as usize]).collect();
     let positions: Vec<glam::Vec3> = first.iter().map(|f| lod.positions[pick(f)]).collect();
+    // Triangles with two corners at one position have no area: they are dropped (the surface
+    // does not change; meshoptimizer would drop them in its first pass anyway, past its target).
+    let flat = |t: &[u32]| {
+        let [a, b, c] = [0, 1, 2].map(|k| positions[remap[t[k] as usize] as usize]);
+        a == b || b == c || a == c
+    };
+    let mut indices: Vec<u32> = Vec::with_capacity(lod.indices.len());
+    let mut submeshes = lod.submeshes.clone();
+    let ranges: Vec<(usize, usize)> = if lod.submeshes.is_empty() {
+        vec![(0, lod.indices.len())]
+    } else {
+        lod.submeshes
+            .iter()
+            .map(|s| {
+                (
+                    s.first_index as usize,
+                    (s.first_index + s.index_count) as usize,
+                )
+            })
+            .collect()
+    };
+    for (k, (from, to)) in ranges.into_iter().enumerate() {
+        let start = indices.len();
+        for t in lod.indices[from..to].chunks_exact(3) {
+            if !flat(t) {
+                indices.extend(t.iter().map(|&i| remap[i as usize]));
+            }
+        }
+        if let Some(sub) = submeshes.get_mut(k) {
+            sub.first_index = start as u32;
+            sub.index_count = (indices.len() - start) as u32;
+        }
+    }
     let normals = if ignore_normals {
         let mut acc = vec![glam::Vec3::ZERO; unique];
         for t in indices.chunks_exact(3) {
@@ -101,7 +199,7 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
             first.iter().map(|f| lod.weights[pick(f)]).collect()
         },
         indices,
-        submeshes: lod.submeshes.clone(),
+        submeshes,
         error: lod.error,
     }
 }

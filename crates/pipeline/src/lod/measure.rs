@@ -1,0 +1,149 @@
+//! A simplification step's result measured against LOD 0 (the distance the LOD builder reports
+//! as a floor under its error and compares candidate builds by), and the vertices the repair
+//! build locks.
+
+use crate::lod_parts::position_ids;
+use crate::surface::{sample_points, TriangleGrid};
+use sinew_core::glam::Vec3;
+use sinew_core::Lod;
+
+/// At most this many far LOD 0 vertices are locked when a step is built again.
+pub(super) const REPAIR_VERTICES: usize = 16;
+
+/// A result's distances to LOD 0, in model units.
+pub(super) struct Measured {
+    /// The distance of LOD 0's farthest vertex from the result's surface: exact when larger than
+    /// `added`, otherwise some value up to `added` (which then decides the distance alone).
+    pub(super) lost: f32,
+    /// The distance of the result's farthest vertex, centroid or edge midpoint from LOD 0's surface.
+    pub(super) added: f32,
+    /// The result's triangles, for [`far_vertices`].
+    grid: TriangleGrid,
+}
+
+impl Measured {
+    /// The symmetric distance: the larger side (exact).
+    pub(super) fn distance(&self) -> f32 {
+        self.lost.max(self.added)
+    }
+}
+
+/// The largest distance from `points` to `grid`'s triangles, as far as it is above `floor`
+/// (otherwise `floor` or less); `None` as soon as one is at least `limit`. A sparse pass first
+/// raises the running maximum, so that most points stop at their first triangle.
+fn farthest(points: &[Vec3], grid: &TriangleGrid, floor: f32, limit: f32) -> Option<f32> {
+    let mut m = floor;
+    for &p in points.iter().step_by(61).chain(points) {
+        m = m.max(grid.distance_above(p, m));
+        if m >= limit {
+            return None;
+        }
+    }
+    Some(m)
+}
+
+/// Measures the triangles `indices` (into `positions`) against LOD 0, given as its distinct
+/// vertex positions and its grid: exact where it matters (see [`Measured`]).
+pub(super) fn measure(
+    positions: &[Vec3],
+    indices: &[u32],
+    base_points: &[Vec3],
+    base_grid: &TriangleGrid,
+) -> Measured {
+    let distinct = distinct(&sample_points(positions, indices));
+    let added = farthest(&distinct, base_grid, 0.0, f32::INFINITY).unwrap_or(f32::INFINITY);
+    let grid = TriangleGrid::new(positions, indices);
+    let lost = farthest(base_points, &grid, added, f32::INFINITY).unwrap_or(f32::INFINITY);
+    Measured { lost, added, grid }
+}
+
+/// [`measure`], or `None` as soon as the distance is known to be at least `limit`.
+pub(super) fn measure_below(
+    positions: &[Vec3],
+    indices: &[u32],
+    base_points: &[Vec3],
+    base_grid: &TriangleGrid,
+    limit: f32,
+) -> Option<Measured> {
+    // Each point once: an edge's midpoint comes from both its triangles (the same bits, as
+    // float addition commutes), and a maximum does not depend on repeats or order.
+    let distinct = distinct(&sample_points(positions, indices));
+    let added = farthest(&distinct, base_grid, 0.0, limit)?;
+    let grid = TriangleGrid::new(positions, indices);
+    let lost = farthest(base_points, &grid, added, limit)?;
+    Some(Measured { lost, added, grid })
+}
+
+/// LOD 0's points at least half as far from the measured result as the farthest (`m.lost`, which
+/// must be exact: larger than `m.added`), farthest first (ties in `base_points`' order), at most
+/// [`REPAIR_VERTICES`].
+pub(super) fn far_vertices(m: &Measured, base_points: &[Vec3]) -> Vec<Vec3> {
+    let half = m.lost * 0.5;
+    let mut far: Vec<(f32, usize)> = base_points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &p)| {
+            let d = m.grid.distance_above(p, half);
+            (d > half && d.is_finite()).then_some((d, i))
+        })
+        .collect();
+    far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    far.truncate(REPAIR_VERTICES);
+    far.into_iter().map(|(_, i)| base_points[i]).collect()
+}
+
+/// The points of `points` with distinct positions (bit for bit), first occurrences, in order.
+pub(super) fn distinct(points: &[Vec3]) -> Vec<Vec3> {
+    let (count, ids) = position_ids(points);
+    let mut out = Vec::with_capacity(count);
+    let mut taken = vec![false; count];
+    for (p, &id) in points.iter().zip(&ids) {
+        if !std::mem::replace(&mut taken[id as usize], true) {
+            out.push(*p);
+        }
+    }
+    out
+}
+
+/// What the repair build locks: the positions (bit patterns, sorted, each once) of `points` and,
+/// for each, the corners of its largest triangle in `source` (the first such in index order).
+/// Locking a vertex alone keeps it in place, but its triangles still go when its neighbours
+/// collapse into one another (a thin part's tip is left with nothing to hold it); a locked
+/// triangle keeps the feature.
+pub(super) fn repair_locks(source: &Lod, points: &[Vec3]) -> Vec<[u32; 3]> {
+    let bits = |p: &Vec3| [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+    let mut want: Vec<([u32; 3], usize)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (bits(p), i))
+        .collect();
+    want.sort_unstable();
+    let mut best: Vec<Option<(f32, usize)>> = vec![None; points.len()];
+    for (ti, t) in source.indices.chunks_exact(3).enumerate() {
+        let corners = [0, 1, 2].map(|i| source.positions[t[i] as usize]);
+        let area = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .length();
+        for c in &corners {
+            let key = bits(c);
+            let start = want.partition_point(|w| w.0 < key);
+            for w in want[start..].iter().take_while(|w| w.0 == key) {
+                let b = &mut best[w.1];
+                if b.is_none_or(|(a, _)| area > a) {
+                    *b = Some((area, ti));
+                }
+            }
+        }
+    }
+    let mut out: Vec<[u32; 3]> = want.iter().map(|w| w.0).collect();
+    for (_, ti) in best.into_iter().flatten() {
+        out.extend(
+            source.indices[3 * ti..3 * ti + 3]
+                .iter()
+                .map(|&v| bits(&source.positions[v as usize])),
+        );
+    }
+    out.sort_unstable();
+    out.dedup();
+    out
+}

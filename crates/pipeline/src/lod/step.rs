@@ -1,0 +1,528 @@
+//! One simplification step of the LOD chain: meshoptimizer's attribute-aware simplifier called on
+//! a welded mesh with the weights, options and per-vertex flags [`LodTuning`] chooses, then the
+//! result regrouped by material, optimised for the vertex cache and compacted.
+//!
+//! The whole mesh is simplified in one call: each vertex belongs to one material range (`weld`
+//! splits shared ones), so a material border is an attribute seam to meshoptimizer, which moves
+//! both sides of it together or not at all. The border stays closed and may still simplify along
+//! itself, and the target is spread over the materials by error rather than by a fixed share of
+//! each. Every triangle of the result keeps the material of its corners.
+
+use super::weld::submesh_of;
+use crate::lod_parts::position_ids;
+use meshopt::{SimplifyOptions, SimplifyVertex};
+use sinew_core::glam;
+use sinew_core::skinning;
+use sinew_core::{Lod, Skeleton, Submesh, Transform};
+
+/// The simplifier's quality knobs. The defaults are the measured best (docs/lod.md); the other values
+/// exist so that `examples/lod_compare.rs --sweep` can show why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodTuning {
+    /// Weight of each normal component in the collapse cost.
+    pub normal_weight: f32,
+    /// Weight of each UV component.
+    pub uv_weight: f32,
+    /// Weight of each component of the displacement under the two test poses (0: not skin-aware).
+    pub pose_weight: f32,
+    /// meshoptimizer's `RegularizeLight` option.
+    pub regularize: bool,
+    /// meshoptimizer's `Permissive` option, with every vertex but those on hard normal edges protected
+    /// (false: hard normal edges restrict collapses like every other attribute seam).
+    pub permissive: bool,
+    /// Build each LOD from the previous one (true) or every LOD from LOD 0 (false, each with the
+    /// whole error budget).
+    pub chain: bool,
+    /// Give each connected part's extreme vertices (`lod_parts`), in parts of any size,
+    /// meshoptimizer's `Priority`, so that moving them costs their displacement: thin and small
+    /// parts keep their reach.
+    pub anchor_part_extremes: bool,
+    /// Build each step a second time with LOD 0's farthest vertices from its result locked, each
+    /// with one triangle around it, and keep the closer of the two builds.
+    pub repair_far_vertices: bool,
+    /// Simplify all material ranges in one call, their borders as seams (true), or each range
+    /// alone towards its share of the target with its border vertices locked (false).
+    pub whole_mesh: bool,
+}
+
+impl Default for LodTuning {
+    fn default() -> Self {
+        Self {
+            normal_weight: NORMAL_WEIGHT,
+            uv_weight: UV_WEIGHT,
+            pose_weight: POSE_WEIGHT,
+            regularize: true,
+            permissive: true,
+            chain: true,
+            anchor_part_extremes: true,
+            repair_far_vertices: true,
+            whole_mesh: true,
+        }
+    }
+}
+
+/// Positions (bit patterns, each list sorted) whose vertices a step must keep: `hard` ones are
+/// locked, `soft` ones get meshoptimizer's `Priority` (moving them costs their displacement).
+/// `open_uv_seams`: see [`vertex_flags`].
+#[derive(Debug, Clone, Default)]
+pub(super) struct Anchors {
+    pub(super) hard: Vec<[u32; 3]>,
+    pub(super) soft: Vec<[u32; 3]>,
+    pub(super) open_uv_seams: bool,
+}
+
+/// Per-vertex attributes the simplifier weighs: normal (3), UV (2), displacement under two test poses (6).
+const ATTRIBUTE_COUNT: usize = 11;
+const NORMAL_WEIGHT: f32 = 0.2;
+const UV_WEIGHT: f32 = 0.5;
+const POSE_WEIGHT: f32 = 4.0;
+const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
+
+/// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
+fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
+    let turn = glam::Quat::from_axis_angle(axis, TEST_POSE_ANGLE_DEGREES.to_radians());
+    let locals: Vec<Transform> = skeleton
+        .bind_local()
+        .iter()
+        .map(|b| Transform {
+            rotation: b.rotation * turn,
+            ..*b
+        })
+        .collect();
+    // The runtime's own local-to-model, palette and skinning, so the test poses deform exactly as a
+    // game would draw them. Joint indices were validated by the caller; on any error the vertices keep
+    // their bind positions (no displacement attribute).
+    let n = skeleton.len();
+    let (mut models, mut palette) = (vec![glam::Mat4::IDENTITY; n], vec![glam::Mat4::IDENTITY; n]);
+    let mut out = lod.positions.clone();
+    let posed = skinning::local_to_model_and_palette(
+        skeleton.parents(),
+        &locals,
+        skeleton.inverse_bind(),
+        &mut models,
+        &mut palette,
+    )
+    .and_then(|()| {
+        skinning::skin(
+            &palette,
+            &lod.positions,
+            &[],
+            &lod.joints,
+            &lod.weights,
+            &mut out,
+            &mut [],
+        )
+    });
+    if posed.is_err() {
+        out.clone_from(&lod.positions);
+    }
+    out
+}
+
+fn extent(positions: &[glam::Vec3]) -> f32 {
+    let (mut lo, mut hi) = (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN));
+    for p in positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    if positions.is_empty() {
+        0.0
+    } else {
+        (hi - lo).max_element()
+    }
+}
+
+fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
+    let n = lod.positions.len();
+    let scale = extent(&lod.positions);
+    let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
+    let poses: Vec<Vec<glam::Vec3>> = match skeleton {
+        Some(s) if lod.is_skinned() && !s.is_empty() => [glam::Vec3::X, glam::Vec3::Z]
+            .iter()
+            .map(|&axis| posed_positions(lod, s, axis))
+            .collect(),
+        _ => Vec::new(),
+    };
+    let mut out = vec![0.0f32; n * ATTRIBUTE_COUNT];
+    for v in 0..n {
+        let a = &mut out[v * ATTRIBUTE_COUNT..(v + 1) * ATTRIBUTE_COUNT];
+        a[0..3].copy_from_slice(&lod.normals[v].to_array());
+        if let Some(uv) = lod.uvs.get(v) {
+            a[3..5].copy_from_slice(&uv.to_array());
+        }
+        for (k, pose) in poses.iter().enumerate() {
+            let d = (pose[v] - lod.positions[v]) * inv;
+            if d.is_finite() {
+                a[5 + 3 * k..8 + 3 * k].copy_from_slice(&d.to_array());
+            }
+        }
+    }
+    out
+}
+
+/// Per-vertex flags for meshoptimizer, one per vertex (never an empty slice for a mesh with vertices):
+/// - at a position used by more than one submesh (a material border): `Lock` when `lock_borders`
+///   (each material simplified alone, so that neighbouring ranges still meet), else `Protect`
+///   (the whole mesh in one call: the border is a seam that meshoptimizer keeps closed);
+/// - `Protect` for every other vertex except those on a hard normal edge: a position shared by
+///   several vertices that all have the same UV, joints and weights and differ only in the normal.
+///   With `Permissive`, meshoptimizer may collapse across the discontinuities of unprotected vertices
+///   (paying the normal difference as attribute error) and treats protected ones as it does without
+///   `Permissive`: UV seams, skin seams and whatever it locks for topology stay as they were. Without
+///   `Permissive`, `Protect` changes nothing. With `open_uv_seams`, positions whose vertices differ
+///   in their UV (and normal) but not in their skin are opened too: the step may then join two UV
+///   charts in one triangle, which the LOD builder allows only where a level could not be built
+///   otherwise, and reports.
+///
+/// `of` is each vertex's submesh ([`submesh_of`]).
+#[cfg(test)]
+pub(super) fn vertex_flags(
+    lod: &Lod,
+    of: &[u32],
+    lock_borders: bool,
+    open_uv_seams: bool,
+) -> Vec<SimplifyVertex> {
+    vertex_flags_with(
+        lod,
+        of,
+        &position_ids(&lod.positions),
+        lock_borders,
+        open_uv_seams,
+    )
+}
+
+/// [`vertex_flags`] with the positions' ids ([`position_ids`]) given.
+fn vertex_flags_with(
+    lod: &Lod,
+    of: &[u32],
+    ids: &(usize, Vec<u32>),
+    lock_borders: bool,
+    open_uv_seams: bool,
+) -> Vec<SimplifyVertex> {
+    const NONE: u32 = u32::MAX;
+    let (count, id_of) = (ids.0, &ids.1);
+    // Per position: the first submesh using it, and whether another submesh uses it too.
+    let mut owner = vec![NONE; count];
+    let mut shared = vec![false; count];
+    for (&id, &s) in id_of.iter().zip(of) {
+        let id = id as usize;
+        if s == NONE {
+            continue;
+        }
+        if owner[id] == NONE {
+            owner[id] = s;
+        } else if owner[id] != s {
+            shared[id] = true;
+        }
+    }
+    // Per position: its first vertex, and whether every later vertex there has the same UV and
+    // skin (a hard normal edge, opened) or not (a UV or skin seam, kept). `None` while the position
+    // has one vertex.
+    let mut first = vec![NONE; count];
+    let mut hard_edge: Vec<Option<bool>> = vec![None; count];
+    for (v, &id) in id_of.iter().enumerate() {
+        let id = id as usize;
+        if first[id] == NONE {
+            first[id] = v as u32;
+            continue;
+        }
+        let a = first[id] as usize;
+        let same = (open_uv_seams || lod.uvs.get(a) == lod.uvs.get(v))
+            && lod.joints.get(a) == lod.joints.get(v)
+            && lod.weights.get(a) == lod.weights.get(v);
+        let open = hard_edge[id].get_or_insert(true);
+        *open &= same;
+    }
+    id_of
+        .iter()
+        .map(|&id| {
+            let id = id as usize;
+            if shared[id] {
+                if lock_borders {
+                    SimplifyVertex::Lock
+                } else {
+                    SimplifyVertex::Protect
+                }
+            } else if hard_edge[id] == Some(true) {
+                SimplifyVertex::None
+            } else {
+                SimplifyVertex::Protect
+            }
+        })
+        .collect()
+}
+
+/// The material ranges of `lod` (one range over every index when it has none).
+fn ranges(lod: &Lod) -> Vec<Submesh> {
+    if lod.submeshes.is_empty() {
+        vec![Submesh {
+            first_index: 0,
+            index_count: lod.indices.len() as u32,
+            material: String::new(),
+        }]
+    } else {
+        lod.submeshes.clone()
+    }
+}
+
+/// Optimises `indices` (into `vertex_count` vertices) for the vertex cache, each material range
+/// of `submeshes` on its own (all of them as one range when there are none).
+pub(super) fn optimize_ranges(indices: &mut [u32], submeshes: &[Submesh], vertex_count: usize) {
+    if submeshes.is_empty() {
+        if !indices.is_empty() {
+            meshopt::optimize_vertex_cache_in_place(indices, vertex_count);
+        }
+        return;
+    }
+    for sub in submeshes {
+        let part =
+            &mut indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize];
+        if !part.is_empty() {
+            meshopt::optimize_vertex_cache_in_place(part, vertex_count);
+        }
+    }
+}
+
+/// A simplification step's result: `indices` into the step's source, grouped by material range
+/// (`submeshes`, empty when the source has none), and meshoptimizer's relative error.
+pub(super) struct Candidate {
+    pub(super) indices: Vec<u32>,
+    pub(super) submeshes: Vec<Submesh>,
+    pub(super) error: f32,
+}
+
+/// One simplification step of a welded source: what every build of the step shares (positions,
+/// attributes and their weights, options, each vertex's material range).
+pub(super) struct Step<'a> {
+    source: &'a Lod,
+    positions: Vec<[f32; 3]>,
+    attrs: Vec<f32>,
+    weights: [f32; ATTRIBUTE_COUNT],
+    flags: SimplifyOptions,
+    of: Vec<u32>,
+    ids: (usize, Vec<u32>),
+    whole: bool,
+}
+
+impl<'a> Step<'a> {
+    /// Prepares a step of `source` (valid, welded) with `tuning`'s weights and options.
+    pub(super) fn new(source: &'a Lod, skeleton: Option<&Skeleton>, tuning: &LodTuning) -> Self {
+        let mut weights = [0.0f32; ATTRIBUTE_COUNT];
+        weights[0..3].fill(tuning.normal_weight);
+        if !source.uvs.is_empty() {
+            weights[3..5].fill(tuning.uv_weight);
+        }
+        if source.is_skinned() && skeleton.is_some() {
+            weights[5..].fill(tuning.pose_weight);
+        }
+        let mut flags = if tuning.regularize {
+            SimplifyOptions::RegularizeLight
+        } else {
+            SimplifyOptions::None
+        };
+        if tuning.permissive {
+            flags |= SimplifyOptions::Permissive;
+        }
+        Step {
+            source,
+            positions: source.positions.iter().map(|p| p.to_array()).collect(),
+            attrs: attributes(source, skeleton),
+            weights,
+            flags,
+            of: submesh_of(source),
+            ids: position_ids(&source.positions),
+            whole: tuning.whole_mesh && source.submeshes.len() > 1,
+        }
+    }
+
+    /// The per-vertex flags ([`vertex_flags`]) with `keep`'s positions locked or given priority.
+    fn flags(&self, lock_borders: bool, keep: &Anchors) -> Vec<SimplifyVertex> {
+        let mut locks = vertex_flags_with(
+            self.source,
+            &self.of,
+            &self.ids,
+            lock_borders,
+            keep.open_uv_seams,
+        );
+        for (l, p) in locks.iter_mut().zip(&self.source.positions) {
+            let bits = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+            if keep.hard.binary_search(&bits).is_ok() {
+                *l = SimplifyVertex::Lock;
+            } else if keep.soft.binary_search(&bits).is_ok() {
+                *l |= SimplifyVertex::Priority;
+            }
+        }
+        locks
+    }
+
+    fn simplify(
+        &self,
+        part: &[u32],
+        locks: &[SimplifyVertex],
+        target: usize,
+        max_error: f32,
+    ) -> (Vec<u32>, f32) {
+        let mut err = 0.0f32;
+        let out = meshopt::simplify_with_attributes_and_locks_decoder(
+            part,
+            &self.positions,
+            &self.attrs,
+            &self.weights,
+            ATTRIBUTE_COUNT * std::mem::size_of::<f32>(),
+            locks,
+            target * 3,
+            max_error,
+            self.flags,
+            Some(&mut err),
+        );
+        (out, err)
+    }
+
+    /// Simplifies the source to about `target_triangles` within `max_error` (relative to its
+    /// extent), `keep`'s vertices locked or given priority.
+    pub(super) fn run(&self, target_triangles: usize, max_error: f32, keep: &Anchors) -> Candidate {
+        let source = self.source;
+        if self.whole {
+            let target = target_triangles.min(source.triangle_count());
+            let (simplified, error) =
+                self.simplify(&source.indices, &self.flags(false, keep), target, max_error);
+            if let Some((indices, submeshes)) = group_by_submesh(source, &self.of, &simplified) {
+                return Candidate {
+                    indices,
+                    submeshes,
+                    error,
+                };
+            }
+            // A triangle whose corners came from two material ranges (meshoptimizer never makes
+            // one across seams it keeps; this is the guard): each range alone, as below.
+        }
+        let locks = self.flags(true, keep);
+        let total = source.triangle_count().max(1);
+        let mut worst = 0.0f32;
+        let mut indices = Vec::with_capacity(source.indices.len());
+        let mut submeshes = Vec::new();
+        for sub in ranges(source) {
+            let part = &source.indices
+                [sub.first_index as usize..(sub.first_index + sub.index_count) as usize];
+            let part_tris = part.len() / 3;
+            // Each range gets its share of the target, rounded; never below one triangle if it had any.
+            let target = ((part_tris as f64 * target_triangles as f64 / total as f64).round()
+                as usize)
+                .clamp(part_tris.min(1), part_tris);
+            let simplified = if part.is_empty() || target >= part_tris {
+                part.to_vec()
+            } else {
+                let (out, err) = self.simplify(part, &locks, target, max_error);
+                worst = worst.max(err);
+                out
+            };
+            submeshes.push(Submesh {
+                first_index: indices.len() as u32,
+                index_count: simplified.len() as u32,
+                material: sub.material.clone(),
+            });
+            indices.extend(simplified);
+        }
+        if source.submeshes.is_empty() {
+            submeshes.clear();
+        }
+        Candidate {
+            indices,
+            submeshes,
+            error: worst,
+        }
+    }
+
+    /// The candidate as a LOD: each range optimised for the vertex cache, unused vertices dropped,
+    /// the rest in first-use order (meshoptimizer's vertex-fetch order).
+    pub(super) fn finish(&self, c: Candidate) -> Lod {
+        let mut indices = c.indices;
+        optimize_ranges(&mut indices, &c.submeshes, self.source.positions.len());
+        compact(self.source, indices, c.submeshes)
+    }
+}
+
+/// The triangles of `simplified` (indices into `source`'s vertices) grouped by the material range
+/// of their corners, ranges in `source`'s order (a range may end up empty): the indices and the
+/// ranges; `None` when a triangle's corners belong to different ranges.
+fn group_by_submesh(
+    source: &Lod,
+    of: &[u32],
+    simplified: &[u32],
+) -> Option<(Vec<u32>, Vec<Submesh>)> {
+    let mut groups: Vec<Vec<u32>> = vec![Vec::new(); source.submeshes.len()];
+    for t in simplified.chunks_exact(3) {
+        let s = of[t[0] as usize];
+        if of[t[1] as usize] != s || of[t[2] as usize] != s {
+            return None;
+        }
+        groups.get_mut(s as usize)?.extend_from_slice(t);
+    }
+    let mut indices = Vec::with_capacity(simplified.len());
+    let mut submeshes = Vec::with_capacity(groups.len());
+    for (g, sub) in groups.into_iter().zip(&source.submeshes) {
+        submeshes.push(Submesh {
+            first_index: indices.len() as u32,
+            index_count: g.len() as u32,
+            material: sub.material.clone(),
+        });
+        indices.extend(g);
+    }
+    Some((indices, submeshes))
+}
+
+/// For each old vertex, its new index in order of first use by `indices` (`u32::MAX` when unused): the
+/// vertex-fetch order meshoptimizer's `optimizeVertexFetchRemap` computes. Written here because the
+/// meshopt 0.7 wrapper truncates that table to the number of used vertices, dropping entries.
+pub(super) fn first_use_remap(indices: &[u32], vertex_count: usize) -> Vec<u32> {
+    let mut remap = vec![u32::MAX; vertex_count];
+    let mut next = 0u32;
+    for &i in indices {
+        let r = &mut remap[i as usize];
+        if *r == u32::MAX {
+            *r = next;
+            next += 1;
+        }
+    }
+    remap
+}
+
+/// Keeps only the vertices the indices use, in first-use order (meshoptimizer's vertex-fetch order).
+fn compact(source: &Lod, mut indices: Vec<u32>, submeshes: Vec<Submesh>) -> Lod {
+    let remap = first_use_remap(&indices, source.positions.len());
+    let kept = remap.iter().filter(|&&r| r != u32::MAX).count();
+    let mut order = vec![0u32; kept];
+    for (old, &new) in remap.iter().enumerate() {
+        if new != u32::MAX {
+            order[new as usize] = old as u32;
+        }
+    }
+    for i in &mut indices {
+        *i = remap[*i as usize];
+    }
+    Lod {
+        positions: order
+            .iter()
+            .map(|&o| source.positions[o as usize])
+            .collect(),
+        normals: order.iter().map(|&o| source.normals[o as usize]).collect(),
+        uvs: if !source.uvs.is_empty() {
+            order.iter().map(|&o| source.uvs[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        joints: if !source.joints.is_empty() {
+            order.iter().map(|&o| source.joints[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        weights: if !source.weights.is_empty() {
+            order.iter().map(|&o| source.weights[o as usize]).collect()
+        } else {
+            Vec::new()
+        },
+        indices,
+        submeshes,
+        error: 0.0,
+    }
+}

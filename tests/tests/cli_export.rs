@@ -517,6 +517,10 @@ fn the_default_scene_shows_the_default_body_and_variants_get_scenes_of_their_own
         ]
     );
     assert_eq!(scene_meshes(&doc3, 0), scene_meshes(&doc, 0));
+    // Each LOD scene is the whole model: a mesh whose level was not built shows its last one.
+    for level in 1..=2 {
+        assert_eq!(scene_meshes(&doc3, level).len(), 2, "scene LOD {level}");
+    }
     assert_eq!(scene_meshes(&doc3, 3), ["heads/reference_head2"]);
     assert_eq!(r3["scenes"], 5);
     assert_eq!(r3["other_meshes"], 2);
@@ -540,4 +544,23 @@ fn the_default_scene_shows_the_default_body_and_variants_get_scenes_of_their_own
         "{}",
         bad.stderr
     );
+}
+
+#[test]
+fn a_lod_scene_shows_a_mesh_whose_level_was_not_built_at_its_last_level() {
+    // cornell_box.obj: eight boxes and walls; five of them cannot lose a triangle more at LOD 2
+    // (lods_not_built), so the file holds 8 + 8 + 3 meshes.
+    let Some(path) = sinew_testdata::corpus_file("obj/cornell_box.obj") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("box.gltf");
+    let r = export(&path, &out, &["--lod", "0.5,0.25", "--variants"]);
+    assert_eq!(r["lod_meshes"], 11);
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let lod2 = scene_meshes(&doc, 2);
+    assert_eq!(doc["scenes"][2]["name"], "LOD 2");
+    assert_eq!(lod2.len(), 8, "{lod2:?}");
+    let at = |suffix: &str| lod2.iter().filter(|n| n.ends_with(suffix)).count();
+    assert_eq!((at(" LOD2"), at(" LOD1")), (3, 5), "{lod2:?}");
 }

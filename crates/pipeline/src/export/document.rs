@@ -230,7 +230,15 @@ pub fn build(asset: &Asset, images: &[ExportImage], options: &ExportOptions) -> 
             .max()
             .unwrap_or(0);
         for level in 1..top {
-            let nodes: Vec<_> = model.iter().filter_map(|&mi| at_level(mi, level)).collect();
+            // A mesh whose level was not built (lods_not_built) shows its last level, so the
+            // scene is the whole model at that level.
+            let nodes: Vec<_> = model
+                .iter()
+                .filter_map(|&mi| {
+                    let last = asset.meshes[mi].lods.len().saturating_sub(1);
+                    at_level(mi, level.min(last))
+                })
+                .collect();
             if !nodes.is_empty() {
                 scenes.push(scene(format!("LOD {level}"), nodes));
             }

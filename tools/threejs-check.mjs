@@ -1,17 +1,42 @@
-// Plays a `sinew export` GLB in three.js (node, no browser) and compares the skinned vertices of
-// every frame with `sinew bake --format pc2` of the same file and clip: prints the largest distance
-// relative to the bounding-box diagonal of the bind pose. Used for docs/export.md; the test suite
-// does not need it. Needs `npm install three` beside it.
+// Plays a `sinew export` GLB in three.js (node, no browser) and compares the skinned vertices with
+// `sinew bake --format pc2` of the same file and clip, at the bake's own frame times (so at any frame
+// rate: bake with `--fps 30` to check what a 30 fps viewer shows of a 24 fps clip). Also compares the
+// rest pose (no animation playing) with the glTF's own bind-pose vertices skinned by three.js's
+// bind pose. Prints the largest distance relative to the bounding-box diagonal of the bind pose.
+// Used for docs/export.md; the test suite does not need it. Needs `npm install three` beside it.
 //   node threejs-check.mjs EXPORT.glb BAKE.pc2 CLIP
 import fs from 'node:fs';
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
 
-const [glbPath, pc2Path, clipName] = process.argv.slice(2);
-const glb = fs.readFileSync(glbPath);
+const [glbPath, pc2Path, clipName, fpsArg] = process.argv.slice(2);
+const fps = Number(fpsArg);
+// Node has no image decoder: the textures are taken out of the JSON chunk before loading (poses and
+// skinning do not depend on them).
+const glb = withoutTextures(fs.readFileSync(glbPath));
 const ab = glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength);
+
+function withoutTextures(bytes) {
+  const jsonLen = bytes.readUInt32LE(12);
+  const json = JSON.parse(bytes.subarray(20, 20 + jsonLen).toString('utf8'));
+  delete json.images;
+  delete json.textures;
+  delete json.samplers;
+  for (const m of json.materials || []) delete m.pbrMetallicRoughness?.baseColorTexture;
+  let text = Buffer.from(JSON.stringify(json), 'utf8');
+  text = Buffer.concat([text, Buffer.alloc((4 - (text.length % 4)) % 4, 0x20)]);
+  const rest = bytes.subarray(20 + jsonLen);
+  const head = Buffer.alloc(20);
+  head.write('glTF', 0, 'ascii');
+  head.writeUInt32LE(2, 4);
+  head.writeUInt32LE(20 + text.length + rest.length, 8);
+  head.writeUInt32LE(text.length, 12);
+  head.write('JSON', 16, 'ascii');
+  return Buffer.concat([head, text, rest]);
+}
 const gltf = await new Promise((ok, fail) => new GLTFLoader().parse(ab, '', ok, fail));
 
+// PC2: "POINTCACHE2\0", version, points, start frame (f32), sample step (f32), samples.
 const pc2 = fs.readFileSync(pc2Path);
 const dv = new DataView(pc2.buffer, pc2.byteOffset, pc2.byteLength);
 const points = dv.getInt32(16, true);
@@ -26,27 +51,30 @@ const n = mesh.geometry.attributes.position.count;
 if (n !== points) throw new Error(`vertices: glTF ${n}, pc2 ${points}`);
 const clip = gltf.animations.find((a) => a.name === clipName);
 if (!clip) throw new Error(`no animation ${clipName}`);
-const times = clip.tracks[0].times;
-if (times.length !== frames) throw new Error(`frames: glTF ${times.length}, pc2 ${frames}`);
+const duration = gltf.parser.json.extras.sinew.clips.find((c) => c.name === clipName).duration;
 
 const box = new THREE.Box3().setFromBufferAttribute(mesh.geometry.attributes.position);
 const diagonal = box.max.distanceTo(box.min);
+const p = new THREE.Vector3();
+
 const mixer = new THREE.AnimationMixer(scene);
 const action = mixer.clipAction(clip);
 action.setLoop(THREE.LoopOnce, 1);
 action.clampWhenFinished = true;
 action.play();
 let worst = 0;
-const p = new THREE.Vector3();
+let worstFrame = 0;
 for (let f = 0; f < frames; f++) {
-  mixer.setTime(times[f]);
+  // The bake's frame rule: frame i at i / fps (f64, rounded to f32), the last exactly at the duration.
+  const t = f + 1 === frames && f > 0 ? duration : Math.fround(f / fps);
+  mixer.setTime(t);
   scene.updateMatrixWorld(true);
   mesh.skeleton.update();
   for (let v = 0; v < n; v++) {
     mesh.getVertexPosition(v, p);
     p.applyMatrix4(mesh.matrixWorld);
     const d = Math.hypot(p.x - baked(f, v, 0), p.y - baked(f, v, 1), p.z - baked(f, v, 2));
-    worst = Math.max(worst, d);
+    if (d > worst) { worst = d; worstFrame = f; }
   }
 }
-console.log(`${glbPath} ${clipName}: ${frames} frames x ${n} vertices, max distance ${worst.toExponential(3)} = ${(worst / diagonal).toExponential(3)} of the diagonal ${diagonal.toFixed(4)}`);
+console.log(`${glbPath} ${clipName}: ${frames} frames at ${fps} fps x ${n} vertices, max distance ${(worst / diagonal).toExponential(2)} of the diagonal ${diagonal.toFixed(4)} (frame ${worstFrame})`);

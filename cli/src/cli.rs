@@ -223,6 +223,10 @@ pub struct ConvertArgs {
     /// were written (a record in OUT-DIR/.sinew-incremental/); redo the rest.
     #[arg(long)]
     pub incremental: bool,
+    /// Also write a static HTML page (one file, no server or network needed) with a row per input:
+    /// a picture of its output, joints, meshes, triangles, LODs, clips, textures, warnings, errors.
+    #[arg(long, value_name = "OUT.html")]
+    pub report: Option<PathBuf>,
     /// Motion file whose clips are bound to the model's skeleton by joint name (repeatable).
     #[arg(long, value_name = "FILE")]
     pub anim: Vec<PathBuf>,
@@ -376,9 +380,9 @@ pub struct BakeArgs {
     /// Output cache file.
     #[arg(short = 'o', long = "output", value_name = "OUT")]
     pub output: PathBuf,
-    /// Mesh index.
-    #[arg(long, default_value_t = 0, value_name = "N")]
-    pub mesh: usize,
+    /// Which meshes to bake.
+    #[command(flatten)]
+    pub body: BodyArgs,
     /// LOD to bake.
     #[arg(long, default_value_t = 0, value_name = "K")]
     pub lod: usize,
@@ -429,9 +433,28 @@ pub struct ExportArgs {
     /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
     #[arg(long, value_name = "R1,R2|none")]
     pub lod: Option<String>,
+    /// Which meshes make the model in the default scene.
+    #[command(flatten)]
+    pub body: BodyArgs,
+    /// Also write every other mesh and every LOD, each in a glTF scene of its own (scene 0 stays the
+    /// model at LOD 0; LODs behind MSFT_lod). Blender 3.4 imports all scenes into one.
+    #[arg(long)]
+    pub variants: bool,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
+}
+
+/// Which meshes make the model (`bake`, `preview`, `export`); default: the default body.
+#[derive(Debug, Args, Clone, Default)]
+pub struct BodyArgs {
+    /// Body number as Half-Life model viewers count it (each body group's choice; 0 is the default
+    /// body). Default: the default body (submodel 0 of every body group; every mesh without groups).
+    #[arg(long, value_name = "N", conflicts_with = "mesh")]
+    pub body: Option<u64>,
+    /// These meshes instead, by index or name, comma separated (`0,3` or `heads/einstein`).
+    #[arg(long, value_name = "N|NAME,...")]
+    pub mesh: Option<String>,
 }
 
 /// `--up` values.
@@ -469,6 +492,9 @@ pub struct PreviewArgs {
     /// Generate LODs first (`0.5,0.25`), or `none` to drop them [default: keep the file's own].
     #[arg(long, value_name = "R1,R2|none")]
     pub lod: Option<String>,
+    /// Which meshes to draw.
+    #[command(flatten)]
+    pub body: BodyArgs,
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,

@@ -129,8 +129,8 @@ impl Record {
 }
 
 /// The fingerprint of everything besides the input's own files that decides an output's bytes: the
-/// sinew version, every option of `args` (except the inputs, output paths, `--jobs`, `--strict` and
-/// `--incremental`, which do not change what is written), and `extra`, the stamps of the `--anim`
+/// sinew version, every option of `args` (except the inputs, output paths, `--jobs`, `--strict`,
+/// `--incremental`, `--timings` and `--report`, which do not change what is written), and `extra`, the stamps of the `--anim`
 /// and `--map` files and what they read. A new option is part of it without being listed, so it can
 /// only cause a rebuild, never a wrong reuse.
 pub fn options_fingerprint(args: &ConvertArgs, extra: &[Stamp]) -> String {
@@ -142,6 +142,7 @@ pub fn options_fingerprint(args: &ConvertArgs, extra: &[Stamp]) -> String {
     a.strict = false;
     a.incremental = false;
     a.timings = false;
+    a.report = None;
     hex(format!("sinew {SINEW_VERSION}\n{a:?}\n{extra:?}").as_bytes())
 }
 
@@ -296,5 +297,24 @@ mod tests {
         assert_eq!(l.state, "ignored");
         assert!(l.records.iter().all(Option::is_none));
         assert!(l.reason.unwrap().contains("b.sinew.json"));
+    }
+
+    fn convert_args(extra: &[&str]) -> ConvertArgs {
+        use clap::Parser;
+        let mut argv = vec!["sinew", "convert", "a.smd", "--out-dir", "out"];
+        argv.extend_from_slice(extra);
+        match crate::cli::Cli::try_parse_from(argv).unwrap().command {
+            crate::cli::Command::Convert(a) => a,
+            _ => unreachable!("convert parses as convert"),
+        }
+    }
+
+    #[test]
+    fn report_and_timings_leave_the_fingerprint_alone_and_other_options_change_it() {
+        let plain = options_fingerprint(&convert_args(&[]), &[]);
+        let watched = convert_args(&["--report", "out/index.html", "--timings", "--jobs", "2"]);
+        assert_eq!(options_fingerprint(&watched, &[]), plain);
+        let other = convert_args(&["--lod", "none"]);
+        assert_ne!(options_fingerprint(&other, &[]), plain);
     }
 }

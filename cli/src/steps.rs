@@ -550,3 +550,15 @@ pub fn lod_spec_options(
     })
     .transpose()
 }
+
+/// The meshes `--body` / `--mesh` name, or `None` when neither is given (the default body).
+pub fn body_meshes(
+    asset: &sinew_core::format::Asset,
+    args: &crate::cli::BodyArgs,
+) -> anyhow::Result<Option<Vec<usize>>> {
+    if args.body.is_none() && args.mesh.is_none() {
+        return Ok(None);
+    }
+    let choice = sinew_pipeline::body::BodyChoice::from_args(args.body, args.mesh.as_deref());
+    Ok(Some(sinew_pipeline::body::select(asset, &choice)?))
+}

@@ -136,11 +136,12 @@ def convert(src: Union[PathLike, Iterable[PathLike]], out: Optional[PathLike] = 
 
 
 def bake(src: PathLike, clip: Union[None, str, Sequence[str]] = None, fps: Optional[float] = None,
-         mesh: int = 0, lod: int = 0) -> np.ndarray:
+         mesh: Optional[int] = None, lod: int = 0) -> np.ndarray:
     """Skins a mesh through clips with sinew's runtime, in memory.
 
     Returns a float32 array of shape ``(frames, vertices, 3)``: the positions ``sinew bake`` writes
-    (split vertex order). ``clip`` is a name or a list baked one after another (default: every clip);
+    (split vertex order) of ``mesh`` (default: the model's default body, its meshes one after another).
+    ``clip`` is a name or a list baked one after another (default: every clip);
     ``fps`` defaults to the first clip's rate. The frame ranges of the clips are in the array's
     ``clips`` attribute of :func:`bake_frames`.
     """
@@ -148,7 +149,7 @@ def bake(src: PathLike, clip: Union[None, str, Sequence[str]] = None, fps: Optio
 
 
 def bake_frames(src: PathLike, clip: Union[None, str, Sequence[str]] = None,
-                fps: Optional[float] = None, mesh: int = 0, lod: int = 0) -> tuple:
+                fps: Optional[float] = None, mesh: Optional[int] = None, lod: int = 0) -> tuple:
     """Like :func:`bake`, returning ``(positions, fps, clips)`` where ``clips`` lists
     ``{name, first_frame, frame_count, looping, duration}`` per clip baked."""
     clips = [] if clip is None else ([clip] if isinstance(clip, str) else list(clip))

@@ -27,13 +27,13 @@ fn run(py: Python<'_>, argv: Vec<String>) -> (u8, Option<String>, Option<String>
 /// clips)`, positions as little-endian f32 bytes, frame-major (`frames x vertices x 3`), and the clip
 /// ranges as JSON (`[{name, first_frame, frame_count, looping, duration}]`).
 #[pyfunction]
-#[pyo3(signature = (path, clips=Vec::new(), fps=None, mesh=0, lod=0))]
+#[pyo3(signature = (path, clips=Vec::new(), fps=None, mesh=None, lod=0))]
 fn bake<'py>(
     py: Python<'py>,
     path: String,
     clips: Vec<String>,
     fps: Option<f32>,
-    mesh: usize,
+    mesh: Option<usize>,
     lod: usize,
 ) -> PyResult<(Bound<'py, PyBytes>, usize, usize, f32, String)> {
     let result = py.detach(
@@ -43,7 +43,7 @@ fn bake<'py>(
             let request = BakeRequest {
                 clips,
                 fps,
-                mesh,
+                meshes: mesh.into_iter().collect(),
                 lod,
                 vertex_order: VertexOrder::Split,
                 ..BakeRequest::default()

@@ -6,6 +6,7 @@ mod common;
 use common::{assert_one_line_error, sinew};
 use sinew_core::format::{self, Asset};
 use sinew_core::{Clip, ClipBinding, Sampler, Skeleton, Transform};
+use sinew_pipeline::export::keys::Tolerance;
 use std::path::{Path, PathBuf};
 
 /// The asset the CLI exports for `path` (what `sinew export` loads without `--lod`).
@@ -44,6 +45,28 @@ fn close(a: Transform, b: Transform, tol: f32) -> bool {
     a.translation.abs_diff_eq(b.translation, tol)
         && a.scale.abs_diff_eq(b.scale, tol)
         && same_rotation(a, b) <= tol
+}
+
+/// The rotation angle between two quaternions, exact for small angles (f64, atan2).
+fn angle(a: sinew_core::glam::Quat, b: sinew_core::glam::Quat) -> f64 {
+    let (a, mut b) = (a.as_dquat().normalize(), b.as_dquat().normalize());
+    if a.dot(b) < 0.0 {
+        b = -b;
+    }
+    4.0 * (a - b).length().atan2((a + b).length())
+}
+
+/// Two keyed poses agree within the joint's export tolerances (`tol`) plus the re-import's
+/// (see `compare`).
+fn keyed_close(a: Transform, b: Transform, tol: &Tolerance) -> bool {
+    let slack = |x: sinew_core::glam::Vec3, y: sinew_core::glam::Vec3| {
+        4.0 * f64::from(x.abs().max(y.abs()).max_element() * f32::EPSILON)
+    };
+    f64::from(a.translation.distance(b.translation))
+        <= 2.0 * tol.translation + slack(a.translation, b.translation)
+        && f64::from((a.scale - b.scale).abs().max_element())
+            <= 2.0 * tol.scale + slack(a.scale, b.scale)
+        && angle(a.rotation, b.rotation) <= 1.5 * tol.rotation + 2e-6
 }
 
 /// Samples `clip` on `skeleton` at `t` with the runtime's sampler (not the exporter's animator path).
@@ -88,9 +111,12 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
             b.bind_local()[k]
         );
     }
-    // Meshes: LOD 0 of each, triangle by triangle.
-    assert_eq!(src.meshes.len(), back.meshes.len(), "{label}: mesh count");
-    for (m, mb) in src.meshes.iter().zip(&back.meshes) {
+    // Meshes: LOD 0 of each mesh of the default body (what the default scene holds), triangle by
+    // triangle.
+    let body = sinew_pipeline::body::select(src, &Default::default()).unwrap();
+    assert_eq!(body.len(), back.meshes.len(), "{label}: mesh count");
+    for (m, mb) in body.iter().map(|&i| &src.meshes[i]).zip(&back.meshes) {
+        assert_eq!(m.name, mb.name, "{label}: mesh names");
         let (l, lb) = (&m.lods[0], &mb.lods[0]);
         assert_eq!(
             l.triangle_count(),
@@ -109,7 +135,11 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
             m.name
         );
     }
-    // Clips: every frame at the clip's rate, every joint.
+    // Clips: every frame at the clip's rate, every joint. The export keeps each channel within its
+    // joint's tolerance (a millionth of the model's size for what the channel moves), and the glTF
+    // importer turns slerp into nlerp keys within 2e-6 rad; f32 values far from the origin carry
+    // their own rounding.
+    let tols = sinew_pipeline::export::animation::tolerances(src);
     let mut frames = 0;
     let mut clips = 0;
     for c in &src.clips {
@@ -133,7 +163,7 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
             let (a, bp) = (pose(s, c, t), pose(b, &cb, t));
             for (j, &k) in map.iter().enumerate() {
                 assert!(
-                    close(a[j], bp[k], 2e-6),
+                    keyed_close(a[j], bp[k], &tols[j]),
                     "{label}: clip {} frame {i} joint {}: {:?} vs {:?}",
                     c.name(),
                     s.names()[j],
@@ -145,7 +175,30 @@ fn compare(src: &Asset, back: &Asset, label: &str) -> (usize, usize, usize) {
         frames += n;
         clips += 1;
     }
-    (src.meshes.len(), clips, frames)
+    (body.len(), clips, frames)
+}
+
+/// Keys over every sampler of every animation, counted from the file's own JSON (each sampler's
+/// input accessor `count`).
+fn keys_in_file(bytes: &[u8], ext: &str) -> u64 {
+    let json: serde_json::Value = if ext == "glb" {
+        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        serde_json::from_slice(&bytes[20..20 + len]).unwrap()
+    } else {
+        serde_json::from_slice(bytes).unwrap()
+    };
+    let Some(animations) = json["animations"].as_array() else {
+        return 0;
+    };
+    animations
+        .iter()
+        .flat_map(|a| a["samplers"].as_array().unwrap())
+        .map(|s| {
+            json["accessors"][s["input"].as_u64().unwrap() as usize]["count"]
+                .as_u64()
+                .unwrap()
+        })
+        .sum()
 }
 
 fn fixture(name: &str) -> PathBuf {
@@ -177,9 +230,10 @@ fn round_trip(input: &Path, ext: &str) -> serde_json::Value {
         clips,
         "{label}"
     );
+    assert!(frames > 0 || clips == 0, "{label}");
     assert_eq!(
-        report["frames"].as_u64().unwrap() as usize,
-        frames,
+        report["keys"].as_u64().unwrap(),
+        keys_in_file(&bytes, ext),
         "{label}"
     );
     report
@@ -210,7 +264,15 @@ fn a_compressed_clip_exports_what_it_decodes_to() {
     let asset = source_asset(&compressed);
     assert!(asset.clips.iter().any(Clip::is_compressed));
     let r = round_trip(&compressed, "glb");
-    assert!(r["lod_meshes"].as_u64().unwrap() >= 1, "{r}");
+    // The file's LODs are left out of the default scene, with a note.
+    assert_eq!(r["lod_meshes"], 0, "{r}");
+    assert!(
+        r["notes"].as_array().unwrap().iter().any(|n| n
+            .as_str()
+            .unwrap()
+            .contains("LOD meshes are not exported; --variants")),
+        "{r}"
+    );
 }
 
 #[test]
@@ -256,10 +318,14 @@ fn half_life_textures_are_embedded_as_png() {
 }
 
 #[test]
-fn lods_go_behind_msft_lod_and_lod0_stays_in_the_scene() {
+fn with_variants_lods_go_behind_msft_lod_and_lod0_stays_in_the_scene() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("biped.gltf");
-    let r = export(&fixture("biped.gltf"), &out, &["--lod", "0.5,0.25"]);
+    let r = export(
+        &fixture("biped.gltf"),
+        &out,
+        &["--lod", "0.5,0.25", "--variants"],
+    );
     assert_eq!(r["lod_meshes"], 2, "{r}");
     let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
     assert_eq!(doc["extensionsUsed"], serde_json::json!(["MSFT_lod"]));
@@ -376,4 +442,125 @@ fn bad_outputs_and_inputs_exit_2_naming_the_file() {
     ]);
     assert_one_line_error(&r, &garbage);
     assert!(!out.exists());
+}
+
+/// The names of the mesh nodes in scene `i` of a `.gltf` document.
+fn scene_meshes(doc: &serde_json::Value, i: usize) -> Vec<String> {
+    doc["scenes"][i]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| &doc["nodes"][n.as_u64().unwrap() as usize])
+        .filter(|n| n.get("mesh").is_some())
+        .map(|n| n["name"].as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn the_default_scene_shows_the_default_body_and_variants_get_scenes_of_their_own() {
+    // man.mdl: a headless body and three heads (one body group of three choices).
+    let Some(path) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man.gltf");
+    let r = export(&path, &out, &["--lod", "0.5,0.25"]);
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(doc["scenes"].as_array().unwrap().len(), 1);
+    assert_eq!(
+        scene_meshes(&doc, 0),
+        ["studio/reference_headless", "heads/reference_head1"]
+    );
+    // Nothing else is in the file: a viewer that imports every node (Blender) shows one model.
+    let mesh_nodes = doc["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| n.get("mesh").is_some())
+        .count();
+    assert_eq!(mesh_nodes, 2);
+    assert_eq!(
+        (r["meshes"].as_u64(), r["lod_meshes"].as_u64()),
+        (Some(2), Some(0))
+    );
+    assert_eq!(
+        doc["extras"]["sinew"]["body"],
+        serde_json::json!(["studio/reference_headless", "heads/reference_head1"])
+    );
+    // Body 2: the third head.
+    let out2 = dir.path().join("man2.gltf");
+    export(&path, &out2, &["--body", "2"]);
+    let doc2: serde_json::Value = serde_json::from_slice(&std::fs::read(&out2).unwrap()).unwrap();
+    assert_eq!(
+        scene_meshes(&doc2, 0),
+        ["studio/reference_headless", "heads/reference_head3"]
+    );
+    // --variants: the model at LOD 1 and 2, then each other head, in scenes of their own; scene 0
+    // unchanged, its nodes listing their LODs in MSFT_lod.
+    let out3 = dir.path().join("man3.gltf");
+    let r3 = export(&path, &out3, &["--lod", "0.5,0.25", "--variants"]);
+    let doc3: serde_json::Value = serde_json::from_slice(&std::fs::read(&out3).unwrap()).unwrap();
+    let names: Vec<&str> = doc3["scenes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "sinew",
+            "LOD 1",
+            "LOD 2",
+            "heads/reference_head2",
+            "heads/reference_head3"
+        ]
+    );
+    assert_eq!(scene_meshes(&doc3, 0), scene_meshes(&doc, 0));
+    // Each LOD scene is the whole model: a mesh whose level was not built shows its last one.
+    for level in 1..=2 {
+        assert_eq!(scene_meshes(&doc3, level).len(), 2, "scene LOD {level}");
+    }
+    assert_eq!(scene_meshes(&doc3, 3), ["heads/reference_head2"]);
+    assert_eq!(r3["scenes"], 5);
+    assert_eq!(r3["other_meshes"], 2);
+    // Every scene starts with the skeleton's root, so each plays the same animations.
+    for s in doc3["scenes"].as_array().unwrap() {
+        assert_eq!(s["nodes"][0], doc3["scenes"][0]["nodes"][0]);
+    }
+    // An unknown body is a one-line error, exit 2.
+    let bad = sinew([
+        "export".as_ref(),
+        path.as_os_str(),
+        "-o".as_ref(),
+        dir.path().join("x.glb").as_os_str(),
+        "--body".as_ref(),
+        "3".as_ref(),
+    ]);
+    assert_one_line_error(&bad, &path);
+    assert!(
+        bad.stderr
+            .contains("body 3 does not exist; the file has 3 bodies"),
+        "{}",
+        bad.stderr
+    );
+}
+
+#[test]
+fn a_lod_scene_shows_a_mesh_whose_level_was_not_built_at_its_last_level() {
+    // cornell_box.obj: eight boxes and walls; five of them cannot lose a triangle more at LOD 2
+    // (lods_not_built), so the file holds 8 + 8 + 3 meshes.
+    let Some(path) = sinew_testdata::corpus_file("obj/cornell_box.obj") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("box.gltf");
+    let r = export(&path, &out, &["--lod", "0.5,0.25", "--variants"]);
+    assert_eq!(r["lod_meshes"], 11);
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+    let lod2 = scene_meshes(&doc, 2);
+    assert_eq!(doc["scenes"][2]["name"], "LOD 2");
+    assert_eq!(lod2.len(), 8, "{lod2:?}");
+    let at = |suffix: &str| lod2.iter().filter(|n| n.ends_with(suffix)).count();
+    assert_eq!((at(" LOD2"), at(" LOD1")), (3, 5), "{lod2:?}");
 }

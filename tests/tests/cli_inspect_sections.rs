@@ -20,7 +20,7 @@ fn biped_sections_are_listed_in_file_order_and_fit_the_file() {
         .collect();
     assert_eq!(
         tags,
-        ["STRS", "SKEL", "MATL", "MESH", "CLIP", "SRCV", "MASK"]
+        ["STRS", "SKEL", "MATL", "MESH", "CLIP", "SRCV", "MASK", "AXES"]
     );
     let len = std::fs::metadata(&path).unwrap().len();
     let mut end = 0;

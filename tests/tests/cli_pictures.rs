@@ -381,3 +381,166 @@ fn bake_preview_draws_the_written_cache() {
         "nothing written on a bad --preview"
     );
 }
+
+#[test]
+fn preview_draws_the_default_body_or_the_one_asked_for() {
+    let Some(man) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("man.png");
+    let shown = |extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "preview".as_ref(),
+            man.as_os_str(),
+            "--clip".as_ref(),
+            "walk".as_ref(),
+            "-o".as_ref(),
+            out.as_os_str(),
+            "--json".as_ref(),
+        ];
+        args.extend(extra.iter().map(|s| std::ffi::OsStr::new(*s)));
+        let r = run_ok(&args);
+        (r["meshes"].clone(), r["triangles"].as_u64().unwrap())
+    };
+    assert_eq!(
+        shown(&[]),
+        (
+            serde_json::json!(["studio/reference_headless", "heads/reference_head1"]),
+            60 + 12
+        )
+    );
+    assert_eq!(
+        shown(&["--body", "1"]),
+        (
+            serde_json::json!(["studio/reference_headless", "heads/reference_head2"]),
+            60 + 6
+        )
+    );
+    assert_eq!(
+        shown(&["--mesh", "3"]).0,
+        serde_json::json!(["heads/reference_head3"])
+    );
+}
+
+/// Columns of a cell (col, row 0 of a contact sheet) holding any pixel other than the cell's
+/// background.
+fn silhouette_width(px: &[u8], width: u32, col: u32) -> usize {
+    let (x0, y0, size) = (col * 256 + 2, 30 + 18, 252u32);
+    let at = |x: u32, y: u32| {
+        let i = ((y * width + x) * 3) as usize;
+        [px[i], px[i + 1], px[i + 2]]
+    };
+    // The cell's own background, from its top-left pixel.
+    let bg = at(x0 + 1, y0 + 1);
+    (x0..x0 + size)
+        .filter(|&x| (y0 + 20..y0 + size).any(|y| at(x, y) != bg))
+        .count()
+}
+
+#[test]
+fn front_is_front_by_the_files_own_axes() {
+    // The biped faces +Z (glTF's convention): seen from the front its arms spread wide, from the
+    // side it is narrow. No --up given.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("biped.png");
+    let r = run_ok(&[
+        "preview".as_ref(),
+        fixture("biped.sinew").as_os_str(),
+        "--clip".as_ref(),
+        "walk".as_ref(),
+        "--frames".as_ref(),
+        "2".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(
+        r["axes"],
+        serde_json::json!({"up": "+y", "forward": "+z", "bind_forward": "+z", "from": "file"})
+    );
+    let (w, _, px) = decode(&out);
+    let (front, side) = (silhouette_width(&px, w, 0), silhouette_width(&px, w, 1));
+    assert!(front > 2 * side, "front {front} px wide, side {side}");
+    // A Half-Life model states Z up, facing +X as it plays and -Y in its bind pose, and draws with
+    // its textures (man.mdl: five materials with images).
+    let Some(man) = sinew_testdata::corpus_file("mdl/man.mdl") else {
+        return;
+    };
+    let out = dir.path().join("man.png");
+    let r = run_ok(&[
+        "preview".as_ref(),
+        man.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(
+        r["axes"],
+        serde_json::json!({"up": "+z", "forward": "+x", "bind_forward": "-y", "from": "file"})
+    );
+    assert_eq!(r["textured_materials"], 5);
+    // --up overrides the file, with that axis's convention for both poses.
+    let r = run_ok(&[
+        "preview".as_ref(),
+        man.as_os_str(),
+        "--up".as_ref(),
+        "z".as_ref(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--json".as_ref(),
+    ]);
+    assert_eq!(r["axes"]["from"], "--up");
+    assert_eq!(r["axes"]["bind_forward"], "+x");
+}
+
+#[test]
+fn gltf_images_stored_inside_the_file_are_drawn_and_exported() {
+    // CesiumMan stores a JPEG in a buffer view, Fox a PNG: both are found, decoded and drawn, and the
+    // export embeds them instead of noting them as missing.
+    let dir = tempfile::tempdir().unwrap();
+    for (file, mime) in [
+        ("gltf/CesiumMan.glb", "image/jpeg"),
+        ("gltf/Fox.glb", "image/png"),
+    ] {
+        let Some(path) = sinew_testdata::corpus_file(file) else {
+            return;
+        };
+        let png = dir.path().join("p.png");
+        let r = run_ok(&[
+            "preview".as_ref(),
+            path.as_os_str(),
+            "--frames".as_ref(),
+            "1".as_ref(),
+            "-o".as_ref(),
+            png.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        assert_eq!(r["textured_materials"], 1, "{file}");
+        let gltf = dir.path().join("e.gltf");
+        let r = run_ok(&[
+            "export".as_ref(),
+            path.as_os_str(),
+            "-o".as_ref(),
+            gltf.as_os_str(),
+            "--json".as_ref(),
+        ]);
+        assert_eq!(r["images"], 1, "{file}: {r}");
+        let doc: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+        assert_eq!(doc["images"][0]["mimeType"], mime, "{file}");
+        // The embedded bytes are the source's image, decodable.
+        let bytes = std::fs::read(&path).unwrap();
+        let found = sinew_import::gltf::embedded_images(file, &bytes, &|_: &str| {
+            Err(std::io::Error::other("no files"))
+        })
+        .unwrap();
+        assert_eq!(found.len(), 1);
+        let img = sinew_pipeline::texture::decode_image("x", &found[0].1).unwrap();
+        assert!(img.width >= 64 && img.height >= 64, "{file}");
+        // Damaged image bytes decode to nothing, without a panic.
+        for cut in [10, found[0].1.len() / 3] {
+            let _ = sinew_pipeline::texture::decode_image("x", &found[0].1[..cut]);
+        }
+    }
+}

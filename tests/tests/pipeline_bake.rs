@@ -499,13 +499,13 @@ fn masks_and_source_maps_round_trip_through_the_format_and_importer() {
         .map(|s| s.tag.to_string())
         .collect();
     assert!(
-        tags.ends_with(&["SRCV".to_string(), "MASK".to_string()]),
+        tags.ends_with(&["SRCV".to_string(), "MASK".to_string(), "AXES".to_string()]),
         "{tags:?}"
     );
     assert_eq!(
         u16::from_le_bytes([bytes[10], bytes[11]]),
-        1,
-        "minor version"
+        6,
+        "minor version (1.6: the file states its axes)"
     );
     let back = format::read(&bytes).unwrap();
     assert_eq!(back, a);

@@ -153,6 +153,8 @@ fn skinned_positions_are_the_bits_of_bake() {
                 &BakeRequest {
                     clips: vec![c.name().to_string()],
                     fps,
+                    // Mesh 0 alone (the default is the model's body, two meshes of man.mdl).
+                    meshes: vec![0],
                     ..BakeRequest::default()
                 },
             )

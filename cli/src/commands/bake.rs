@@ -104,7 +104,7 @@ fn cache_picture(
             })
             .unwrap_or_else(|| format!("frame {f}"))
     };
-    let up = super::preview::up_axis(args.up, &args.file, !asset.game.is_empty());
+    let (axes, _) = super::preview::picture_axes(args.up, &args.file, asset);
     let title = format!(
         "{}  |  {} frames x {} vertices at {} fps (as stored)",
         Path::new(&shown)
@@ -115,9 +115,15 @@ fn cache_picture(
         frames.vertex_count,
         fps
     );
-    cache_strip(&frames, &baked.indices, up, &title, label)
-        .map_err(anyhow::Error::msg)
-        .with_context(|| shown.clone())
+    cache_strip(
+        &frames,
+        &baked.indices,
+        sinew_pipeline::preview::camera::Facing::of(axes, false),
+        &title,
+        label,
+    )
+    .map_err(anyhow::Error::msg)
+    .with_context(|| shown.clone())
 }
 
 /// Runs `sinew bake`.
@@ -149,11 +155,14 @@ pub fn run(args: &BakeArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         bail!("give --clip or --layer, not both");
     }
     let asset = load_asset(&args.file, &args.import, args.lod > 0)?;
+    let meshes = crate::steps::body_meshes(&asset, &args.body)
+        .with_context(|| format!("{shown}"))?
+        .unwrap_or_default();
     let request = BakeRequest {
         clips: args.clip.clone(),
         layers,
         fps: args.fps,
-        mesh: args.mesh,
+        meshes,
         lod: args.lod,
         vertex_order: match args.vertex_order {
             VertexOrderArg::Split => VertexOrder::Split,

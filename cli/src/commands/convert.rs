@@ -449,6 +449,14 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     if args.jobs == Some(0) {
         bail!("--jobs: must be at least 1");
     }
+    if let Some(r) = &args.report {
+        if !r
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("html"))
+        {
+            bail!("{}: the report must end in .html", r.display());
+        }
+    }
     if args.map.is_some() && args.anim.is_empty() {
         bail!("--map: needs at least one --anim motion file to apply to");
     }
@@ -493,6 +501,10 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         }
         _ => bail!("convert: give -o OUT.sinew (one input) or --out-dir DIR"),
     };
+    // The report may go into the output folder, which exists from here on.
+    if let Some(r) = &args.report {
+        check_output_path(r)?;
+    }
     let map = args.map.as_deref().map(MappingFile::read).transpose()?;
     // What the --anim and --map files hold is part of the incremental record's fingerprint.
     let mut extra = Vec::new();
@@ -552,6 +564,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
             outcome => file_report(job, outcome, plan.strict),
         };
         let report = ConvertReport::new(vec![file], Vec::new(), plan.strict, incremental_report);
+        write_html(&report, args)?;
         emit(&report, ctx)?;
         return Ok(finish(&report, ctx));
     }
@@ -615,8 +628,30 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     }
     let skipped = batch::skipped(&passed, &jobs, &reads);
     let report = ConvertReport::new(files, skipped, plan.strict, incremental_report);
+    pool.install(|| write_html(&report, args))?;
     emit(&report, ctx)?;
     Ok(finish(&report, ctx))
+}
+
+/// `--report OUT.html`: the run's page (docs/cli.md), written atomically.
+fn write_html(report: &ConvertReport, args: &ConvertArgs) -> anyhow::Result<()> {
+    let Some(path) = &args.report else {
+        return Ok(());
+    };
+    let json = serde_json::to_value(report)?;
+    let thumbs = crate::report::html::thumbnails(report);
+    let title = format!(
+        "sinew convert: {}",
+        args.inputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    );
+    write_atomic(
+        path,
+        crate::report::html::page(&json, &thumbs, &title).as_bytes(),
+    )
 }
 
 /// Lists the failures and orphaned companions on stderr (also with --quiet or --json, not when a

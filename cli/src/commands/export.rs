@@ -45,11 +45,17 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let game = crate::report::game::game_report(&loaded.asset.game)
         .map(|g| serde_json::to_value(g).context("encoding the game data"))
         .transpose()?;
+    let meshes =
+        crate::steps::body_meshes(&loaded.asset, &args.body).with_context(|| shown.clone())?;
     let (bytes, report) = export::export(
         &loaded.asset,
         &loaded.images,
         container,
-        &ExportOptions { game },
+        &ExportOptions {
+            game,
+            meshes,
+            variants: args.variants,
+        },
     )
     .map_err(anyhow::Error::msg)
     .with_context(|| shown.clone())?;
@@ -76,8 +82,8 @@ pub fn run(args: &ExportArgs, ctx: &Ctx) -> anyhow::Result<Status> {
 pub fn human(r: &ExportCmdReport) -> String {
     let e = &r.export;
     let mut s = format!(
-        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes), {} materials, {} images, {} animations ({} frames)\n",
-        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.materials, e.images, e.animations, e.frames
+        "{} -> {}: {} bytes, {} joints, {} meshes (+{} LOD meshes, +{} other meshes, {} scenes), {} materials, {} images, {} animations ({} keys)\n",
+        r.input, r.output, r.bytes, e.joints, e.meshes, e.lod_meshes, e.other_meshes, e.scenes, e.materials, e.images, e.animations, e.keys
     );
     for n in &e.notes {
         s.push_str(&format!("  note: {n}\n"));
@@ -91,11 +97,16 @@ pub struct Loaded {
     pub asset: Asset,
     /// Images found for the materials' textures.
     pub images: Vec<ExportImage>,
+    /// The same images decoded to RGBA (those a Half-Life source carries, those a glTF stores inside
+    /// itself, and PNG or JPEG files found beside the input), named by the materials' `texture`
+    /// strings: what pictures draw.
+    pub decoded: Vec<sinew_scene::Image>,
 }
 
 /// Loads FILE as the runtime would see it: a `.sinew` is decoded as stored (compressed clips stay
 /// compressed) unless `lods` asks for new LODs; a source file is imported, given LODs when asked, and
-/// compiled. Images: those the source carries (Half-Life), else files beside FILE that materials name.
+/// compiled. Images: those the source carries (Half-Life), those a glTF stores inside itself, else
+/// files beside FILE that materials name.
 pub fn load(
     path: &Path,
     import: &crate::cli::ImportArgs,
@@ -121,6 +132,7 @@ pub fn load(
         format::read(&bytes).with_context(|| format!("{shown}: reading the compiled asset back"))?
     };
     let mut images = Vec::new();
+    let mut decoded = scene_images.clone();
     for img in &scene_images {
         let bytes = sinew_pipeline::texture::encode_png(img).map_err(anyhow::Error::msg)?;
         images.push(ExportImage {
@@ -131,17 +143,36 @@ pub fn load(
             alpha_mask: img.rgba.chunks_exact(4).any(|p| p[3] < 255),
         });
     }
+    // Images a glTF source stores inside itself (materials name them `images[N]`).
+    let is_gltf = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+    let mut embedded = Vec::new();
+    if is_gltf && !is_sinew {
+        let bytes = std::fs::read(path).with_context(|| format!("{shown}: reading"))?;
+        let resolve = sinew_import::beside(path);
+        embedded = sinew_import::gltf::embedded_images(&shown.to_string(), &bytes, &resolve)?;
+    }
     let dir = path.parent().unwrap_or(Path::new(""));
     for m in &asset.materials {
         let Some(t) = &m.texture else { continue };
         if images.iter().any(|i| &i.key == t) {
             continue;
         }
-        if let Some(img) = texture_file(dir, t) {
+        let found = match embedded.iter().find(|(k, _)| k == t) {
+            Some((k, b)) => image_of(k, k, b.clone()),
+            None => texture_file(dir, t),
+        };
+        if let Some(img) = found {
+            decoded.extend(sinew_pipeline::texture::decode_image(&img.key, &img.bytes));
             images.push(img);
         }
     }
-    Ok(Loaded { asset, images })
+    Ok(Loaded {
+        asset,
+        images,
+        decoded,
+    })
 }
 
 /// A PNG or JPEG file named by a material, relative to the input's folder; `None` when it is not
@@ -156,6 +187,15 @@ fn texture_file(dir: &Path, texture: &str) -> Option<ExportImage> {
         return None;
     }
     let bytes = std::fs::read(&p).ok()?;
+    let name = p
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| texture.to_string());
+    image_of(texture, &name, bytes)
+}
+
+/// An image to embed, keyed `key`, when `bytes` are a PNG or JPEG file.
+fn image_of(key: &str, name: &str, bytes: Vec<u8>) -> Option<ExportImage> {
     let mime = if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         "image/png"
     } else if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
@@ -163,13 +203,9 @@ fn texture_file(dir: &Path, texture: &str) -> Option<ExportImage> {
     } else {
         return None;
     };
-    let name = p
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| texture.to_string());
     Some(ExportImage {
-        key: texture.to_string(),
-        name,
+        key: key.to_string(),
+        name: name.to_string(),
         mime: mime.to_string(),
         bytes,
         alpha_mask: false,

@@ -8,6 +8,7 @@
 pub mod build;
 pub mod convert;
 pub mod game;
+pub mod html;
 pub mod pose;
 pub mod scene;
 #[cfg(test)]

@@ -4,7 +4,7 @@
 mod format_support;
 
 use format_support::*;
-use sinew_core::format::{self, Asset, FormatErrorKind as K, Tag};
+use sinew_core::format::{self, Asset, Axes, Axis, FormatErrorKind as K, Tag};
 use sinew_core::glam::Vec3;
 use sinew_core::{ClipBinding, Sampler, Transform};
 
@@ -574,4 +574,60 @@ fn track_records_hold_kind_encoding_and_payload_as_documented() {
     let frames = tracks + 4 * 64;
     assert_eq!(clip.len(), frames + 3 * 7 * 4);
     assert_eq!(&clip[frames + 28..frames + 32], &1.0f32.to_le_bytes());
+}
+
+// The `AXES` section (format 1.6).
+
+fn half_life() -> Asset {
+    Asset {
+        axes: Some(Axes::new(Axis::PosZ, Axis::PosX, Axis::NegY).unwrap()),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn axes_round_trip_in_a_version_1_6_file_with_the_documented_bytes() {
+    let bytes = format::write(&half_life()).unwrap();
+    assert_eq!(u16_at(&bytes, 10), 6, "minor version");
+    let back = format::read(&bytes).unwrap();
+    assert_eq!(back.axes, half_life().axes);
+    let sections = split(&bytes);
+    let axes = sections.iter().find(|s| &s.0 == b"AXES").unwrap();
+    // up +Z (4), forward +X (0), bind forward -Y (3), 13 zero bytes.
+    let mut want = vec![4u8, 0, 3];
+    want.extend([0u8; 13]);
+    assert_eq!(axes.2, want);
+    // No axes: no section, and the minor version of the rest (1.1 here).
+    let plain = format::write(&Asset::default()).unwrap();
+    assert!(split(&plain).iter().all(|s| &s.0 != b"AXES"));
+    assert_eq!(u16_at(&plain, 10), 1);
+    assert_eq!(format::read(&plain).unwrap().axes, None);
+}
+
+#[test]
+fn bad_axes_are_errors_naming_the_section() {
+    let bytes = format::write(&half_life()).unwrap();
+    let mut sections = split(&bytes);
+    let at = sections.iter().position(|s| &s.0 == b"AXES").unwrap();
+    for (byte, value) in [(0usize, 6u8), (1, 5), (2, 4), (1, 255)] {
+        let mut s = sections.clone();
+        s[at].2[byte] = value;
+        let e = format::read(&assemble(1, 6, &s)).unwrap_err();
+        assert_eq!(e.section, "AXES", "byte {byte} = {value}: {e}");
+        assert!(matches!(e.kind, K::Invalid(_)), "{e}");
+    }
+    // Shorter than 16 bytes: truncated.
+    sections[at].2.truncate(15);
+    let e = format::read(&assemble(1, 6, &sections)).unwrap_err();
+    assert!(matches!(e.kind, K::Truncated { .. }), "{e}");
+    // The writer refuses what the reader refuses.
+    let bad = Asset {
+        axes: Some(Axes {
+            up: Axis::PosY,
+            forward: Axis::NegY,
+            bind_forward: Axis::PosZ,
+        }),
+        ..Default::default()
+    };
+    assert!(format::write(&bad).is_err());
 }

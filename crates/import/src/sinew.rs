@@ -43,6 +43,7 @@ pub fn scene_from_asset(asset: Asset) -> Scene {
     let maps = asset.source_vertex;
     scene.masks = asset.masks;
     scene.game = asset.game;
+    scene.axes = asset.axes;
     for (mi, mesh) in asset.meshes.into_iter().enumerate() {
         let mut lods = mesh.lods.into_iter().enumerate();
         let geometry = lods.next().map(|(_, l)| l).unwrap_or_default();

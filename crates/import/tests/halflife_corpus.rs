@@ -82,19 +82,27 @@ fn man_mdl_skeleton_meshes_and_companions() {
     let root = sk.bind_local()[0].rotation;
     assert!(root.angle_between(Quat::from_rotation_x(std::f32::consts::FRAC_PI_2)) < 1e-3);
 
-    // The default body: reference_headless (40 vertices) and reference_head1 (8), merged.
+    // Every submodel is a mesh of its own: reference_headless (40 vertices) of body part "studio",
+    // and the three choices of "heads" (8, 5 and 58 vertices); the body groups name them.
     let names: Vec<&str> = s.meshes.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(
         names,
-        ["man", "heads/reference_head2", "heads/reference_head3"]
+        [
+            "studio/reference_headless",
+            "heads/reference_head1",
+            "heads/reference_head2",
+            "heads/reference_head3"
+        ]
     );
-    assert_eq!(s.meshes[0].source_vertex_count, 48);
+    let sources: Vec<u32> = s.meshes.iter().map(|m| m.source_vertex_count).collect();
+    assert_eq!(sources, [40, 8, 5, 58]);
     let tris: Vec<usize> = s
         .meshes
         .iter()
         .map(|m| m.geometry.indices.len() / 3)
         .collect();
-    assert_eq!(tris, [72, 6, 112]);
+    // The default body (headless + head1) has the 72 triangles the merged mesh had.
+    assert_eq!(tris, [60, 12, 6, 112]);
     // Textures came from manT.mdl: five images at their stored sizes.
     let images: Vec<(&str, u32, u32)> = s
         .images
@@ -342,7 +350,7 @@ fn a_missing_companion_is_an_error_naming_it_or_with_allow_missing_a_warning() {
     // Everything else is there.
     assert_eq!(s.skeleton.as_ref().unwrap().len(), 8);
     assert_eq!(s.clips.len(), 6);
-    assert_eq!(s.meshes.len(), 3);
+    assert_eq!(s.meshes.len(), 4);
 }
 
 #[test]

@@ -19,12 +19,21 @@
 //! the segment's animator with every layer's time set), so the result is the same bits for any thread
 //! count.
 //!
+//! # Meshes
+//!
+//! A bake skins the meshes of the request at the same LOD, their vertices one after another in the
+//! order given (triangle indices offset accordingly). No meshes given means the model's default body
+//! ([`crate::body`]: submodel 0 of every body group, every mesh when there are none), its skinned
+//! meshes only.
+//!
 //! # Vertex order
 //!
 //! [`VertexOrder::Split`] is the LOD's own vertex order. [`VertexOrder::Source`] (LOD 0 only) is the
 //! source file's vertex order through the file's source-vertex map: source vertex `s` takes the values of
-//! the first LOD-0 vertex that maps to it. Every source vertex must be used.
+//! the first LOD-0 vertex that maps to it. Every source vertex must be used. With several meshes each
+//! keeps its own source order, one mesh after another.
 
+use crate::body::{self, BodyChoice, BodyError};
 use crate::cache::Frames;
 use rayon::prelude::*;
 use sinew_core::format::Asset;
@@ -103,8 +112,8 @@ pub struct BakeRequest {
     pub layers: Vec<LayerSpec>,
     /// Frames per second; default: the sample rate of the first clip (or first layer's clip).
     pub fps: Option<f32>,
-    /// Mesh index.
-    pub mesh: usize,
+    /// Mesh indices, skinned one after another; empty = the default body's skinned meshes.
+    pub meshes: Vec<usize>,
     /// LOD index.
     pub lod: usize,
     /// Vertex order of the output.
@@ -137,7 +146,11 @@ pub struct Baked {
     pub bind_positions: Vec<Vec3>,
     /// Triangles in the output vertex order.
     pub indices: Vec<u32>,
-    /// Name of the mesh.
+    /// The meshes baked, in output order.
+    pub meshes: Vec<usize>,
+    /// Their names.
+    pub mesh_names: Vec<String>,
+    /// Their names joined with ` + ` (one name for one mesh).
     pub mesh_name: String,
 }
 
@@ -168,6 +181,9 @@ pub enum BakeError {
     /// The LOD has no joint weights.
     #[error("mesh {0:?} is not skinned")]
     NotSkinned(String),
+    /// The default body could not be found.
+    #[error("{0}")]
+    Body(#[from] BodyError),
     /// A clip name is not in the file.
     #[error("no clip {name:?}; the file has: {}", list(available))]
     UnknownClip {
@@ -295,22 +311,58 @@ struct Segment<'a> {
     duration: f32,
 }
 
+/// The meshes of a request with their LOD: the request's, or the default body's skinned meshes.
+fn chosen_lods<'a>(
+    asset: &'a Asset,
+    req: &BakeRequest,
+) -> Result<Vec<(usize, &'a Lod)>, BakeError> {
+    let given = !req.meshes.is_empty();
+    let meshes = if given {
+        req.meshes.clone()
+    } else {
+        body::select(asset, &BodyChoice::Default)?
+    };
+    let mut out = Vec::with_capacity(meshes.len());
+    let mut first_static = None;
+    for &m in &meshes {
+        let mesh = asset.meshes.get(m).ok_or(BakeError::NoMesh {
+            mesh: m,
+            count: asset.meshes.len(),
+        })?;
+        let lod = mesh.lods.get(req.lod).ok_or_else(|| BakeError::NoLod {
+            lod: req.lod,
+            mesh: mesh.name.clone(),
+            last: mesh.lods.len().saturating_sub(1),
+        })?;
+        if !lod.is_skinned() {
+            if given {
+                return Err(BakeError::NotSkinned(mesh.name.clone()));
+            }
+            first_static.get_or_insert(mesh.name.clone());
+            continue;
+        }
+        out.push((m, lod));
+    }
+    if out.is_empty() {
+        return Err(match first_static {
+            Some(name) => BakeError::NotSkinned(name),
+            None => BakeError::NoMesh {
+                mesh: 0,
+                count: asset.meshes.len(),
+            },
+        });
+    }
+    Ok(out)
+}
+
 /// Bakes the request on a decoded asset.
 pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
     let skeleton = asset.skeleton.as_ref().ok_or(BakeError::NoSkeleton)?;
-    let mesh = asset.meshes.get(req.mesh).ok_or(BakeError::NoMesh {
-        mesh: req.mesh,
-        count: asset.meshes.len(),
-    })?;
-    let lod = mesh.lods.get(req.lod).ok_or_else(|| BakeError::NoLod {
-        lod: req.lod,
-        mesh: mesh.name.clone(),
-        last: mesh.lods.len().saturating_sub(1),
-    })?;
-    if !lod.is_skinned() {
-        return Err(BakeError::NotSkinned(mesh.name.clone()));
-    }
-    let order = output_order(asset, req, lod)?;
+    let lods = chosen_lods(asset, req)?;
+    let orders = lods
+        .iter()
+        .map(|&(m, lod)| output_order(asset, req, m, lod))
+        .collect::<Result<Vec<_>, _>>()?;
     let names: Vec<String> = asset.clips.iter().map(|c| c.name().to_string()).collect();
     let find = |name: &str| {
         asset
@@ -416,9 +468,15 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
         .enumerate()
         .flat_map(|(si, s)| (0..s.frame_count).map(move |i| (si, i)))
         .collect();
-    let nv = lod.vertex_count();
-    let with_normals = !lod.normals.is_empty();
-    let out_n = order.as_ref().map_or(nv, Vec::len);
+    // Each mesh's slice of a frame: (first output vertex, output vertices).
+    let mut spans = Vec::with_capacity(lods.len());
+    let mut out_n = 0usize;
+    for ((_, lod), order) in lods.iter().zip(&orders) {
+        let n = order.as_ref().map_or(lod.vertex_count(), Vec::len);
+        spans.push((out_n, n));
+        out_n += n;
+    }
+    let with_normals = lods.iter().all(|(_, l)| !l.normals.is_empty());
     let mut positions = vec![Vec3::ZERO; total * out_n];
     let mut normals = vec![Vec3::ZERO; if with_normals { total * out_n } else { 0 }];
     let normal_chunks: Vec<&mut [Vec3]> = if with_normals {
@@ -433,40 +491,60 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
         .try_for_each(|((pos, nor), &(si, i))| -> Result<(), BakeError> {
             let s = &segments[si];
             let t = frame_time(i, s.frame_count, s.duration, fps);
-            let mut scratch_p = vec![Vec3::ZERO; nv];
-            let mut scratch_n = vec![Vec3::ZERO; if with_normals { nv } else { 0 }];
-            let (p_out, n_out): (&mut [Vec3], &mut [Vec3]) = if order.is_some() {
-                (&mut scratch_p, &mut scratch_n)
-            } else {
-                (pos, nor)
-            };
-            skin_frame(s, lod, t, p_out, n_out)?;
-            if let Some(order) = &order {
-                for (o, &v) in order.iter().enumerate() {
-                    pos[o] = scratch_p[v as usize];
-                    if with_normals {
-                        nor[o] = scratch_n[v as usize];
+            let palette = pose_frame(s, t)?;
+            for (((_, lod), order), &(first, n)) in lods.iter().zip(&orders).zip(&spans) {
+                let nv = lod.vertex_count();
+                let pos = &mut pos[first..first + n];
+                let nor = if with_normals {
+                    &mut nor[first..first + n]
+                } else {
+                    &mut nor[..0]
+                };
+                match order {
+                    None => {
+                        skin_lod(&palette, lod, pos, nor)?;
+                    }
+                    Some(order) => {
+                        let mut scratch_p = vec![Vec3::ZERO; nv];
+                        let mut scratch_n = vec![Vec3::ZERO; if with_normals { nv } else { 0 }];
+                        skin_lod(&palette, lod, &mut scratch_p, &mut scratch_n)?;
+                        for (o, &v) in order.iter().enumerate() {
+                            pos[o] = scratch_p[v as usize];
+                            if with_normals {
+                                nor[o] = scratch_n[v as usize];
+                            }
+                        }
                     }
                 }
             }
             Ok(())
         })?;
-    let (bind_positions, indices) = match (&order, req.vertex_order) {
-        (Some(order), VertexOrder::Source) => {
-            let map = asset
-                .source_vertex(req.mesh)
-                .map(|m| &m.map[..])
-                .unwrap_or(&[]);
-            (
-                order.iter().map(|&v| lod.positions[v as usize]).collect(),
-                lod.indices
-                    .iter()
-                    .map(|&i| map.get(i as usize).copied().unwrap_or(0))
-                    .collect(),
-            )
+    let mut bind_positions = Vec::with_capacity(out_n);
+    let mut indices = Vec::new();
+    let mut source_base = 0u32;
+    for (((m, lod), order), &(first, _)) in lods.iter().zip(&orders).zip(&spans) {
+        match (order, req.vertex_order) {
+            (Some(order), VertexOrder::Source) => {
+                let map = asset.source_vertex(*m).map(|s| &s.map[..]).unwrap_or(&[]);
+                bind_positions.extend(order.iter().map(|&v| lod.positions[v as usize]));
+                indices.extend(
+                    lod.indices
+                        .iter()
+                        .map(|&i| source_base + map.get(i as usize).copied().unwrap_or(0)),
+                );
+                source_base += order.len() as u32;
+            }
+            _ => {
+                bind_positions.extend_from_slice(&lod.positions);
+                indices.extend(lod.indices.iter().map(|&i| first as u32 + i));
+            }
         }
-        _ => (lod.positions.clone(), lod.indices.clone()),
-    };
+    }
+    let meshes: Vec<usize> = lods.iter().map(|(m, _)| *m).collect();
+    let mesh_names: Vec<String> = meshes
+        .iter()
+        .map(|&m| asset.meshes[m].name.clone())
+        .collect();
     Ok(Baked {
         frames: Frames {
             vertex_count: out_n,
@@ -478,7 +556,9 @@ pub fn bake(asset: &Asset, req: &BakeRequest) -> Result<Baked, BakeError> {
         clips,
         bind_positions,
         indices,
-        mesh_name: mesh.name.clone(),
+        mesh_name: mesh_names.join(" + "),
+        meshes,
+        mesh_names,
     })
 }
 
@@ -545,7 +625,8 @@ pub fn skin_into(
             },
             |(positions, normals), (frame, &t)| -> Result<(), BakeError> {
                 // Normals are skinned too when the LOD has them, as `bake` does.
-                skin_frame(&segment, lod_data, t, positions, normals)?;
+                let palette = pose_frame(&segment, t)?;
+                skin_lod(&palette, lod_data, positions, normals)?;
                 for (o, p) in frame.chunks_exact_mut(3).zip(positions.iter()) {
                     o.copy_from_slice(&p.to_array());
                 }
@@ -558,6 +639,7 @@ pub fn skin_into(
 fn output_order(
     asset: &Asset,
     req: &BakeRequest,
+    mesh: usize,
     lod: &Lod,
 ) -> Result<Option<Vec<u32>>, BakeError> {
     if req.vertex_order == VertexOrder::Split {
@@ -569,7 +651,7 @@ fn output_order(
             req.lod
         )));
     }
-    let map = asset.source_vertex(req.mesh).ok_or_else(|| {
+    let map = asset.source_vertex(mesh).ok_or_else(|| {
         BakeError::SourceOrder("the file has no source-vertex map for this mesh".into())
     })?;
     if map.map.len() != lod.vertex_count() {
@@ -593,15 +675,9 @@ fn output_order(
     Ok(Some(first))
 }
 
-/// Poses and skins one frame at clip time `t`: a fresh copy of the segment's animator with every
-/// layer at `t`, its model matrices and palette for the frame, then the runtime's skinning.
-fn skin_frame(
-    segment: &Segment<'_>,
-    lod: &Lod,
-    t: f32,
-    out_p: &mut [Vec3],
-    out_n: &mut [Vec3],
-) -> Result<(), BakeError> {
+/// Poses one frame at clip time `t`: a fresh copy of the segment's animator with every layer at `t`,
+/// and the skinning palette of that pose.
+fn pose_frame(segment: &Segment<'_>, t: f32) -> Result<Vec<Mat4>, BakeError> {
     let mut animator = segment.animator.clone();
     for &layer in &segment.layers {
         animator.set_time(layer, t)?;
@@ -623,8 +699,7 @@ fn skin_frame(
             },
             other => BakeError::Animator(other),
         })?;
-    skin_lod(&palette, lod, out_p, out_n)?;
-    Ok(())
+    Ok(palette)
 }
 
 /// The mesh as Wavefront OBJ: `v` lines (bind-pose positions in the bake's vertex order) and `f` lines

@@ -100,6 +100,7 @@ fn compile_parts(scene: &Scene, clips: Option<Vec<Clip>>) -> Result<Asset, Compi
         source_vertex,
         masks: scene.masks.clone(),
         game: scene.game.clone(),
+        axes: scene.axes,
     };
     format::validate(&asset)?;
     Ok(asset)
@@ -368,6 +369,33 @@ mod tests {
         // The constant translation comes back as one key at 0 instead of 0.2; it compiles the same.
         assert_eq!(back.clips[0].tracks[0].translation.times, [0.0]);
         assert_eq!(compile_to_bytes(&back).unwrap(), bytes);
+    }
+
+    #[test]
+    fn a_single_pose_clip_reports_its_raw_size() {
+        // One key: nothing is animated, but the clip stores the leg's pose (and the hips').
+        fn first<T: Copy>(c: &Curve<T>) -> Curve<T> {
+            Curve::new(
+                c.times.iter().take(1).copied().collect(),
+                c.values.iter().take(1).copied().collect(),
+            )
+        }
+        let mut s = scene();
+        for t in &mut s.clips[0].tracks {
+            t.translation = first(&t.translation);
+            t.rotation = first(&t.rotation);
+            t.scale = first(&t.scale);
+        }
+        let (_, report) = compile_with(&s, &CompileOptions::default()).unwrap();
+        let r = &report.clips[0];
+        let driven = s.clips[0]
+            .tracks
+            .iter()
+            .filter(|t| !t.translation.is_empty() || !t.rotation.is_empty() || !t.scale.is_empty())
+            .count();
+        assert_eq!((r.animated_joints, r.samples), (0, 1));
+        assert_eq!(r.raw_bytes, 40 * driven);
+        assert!(driven > 0 && r.ratio > 0.0, "{r:?}");
     }
 
     #[test]

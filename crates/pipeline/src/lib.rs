@@ -3,6 +3,7 @@
 //! format, baking vertex caches and verifying them against the runtime.
 
 pub mod bake;
+pub mod body;
 pub mod cache;
 pub mod compile;
 pub mod compress;

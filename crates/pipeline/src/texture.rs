@@ -1,6 +1,6 @@
 //! Texture images a source carried (Half-Life models embed 8-bit paletted textures), written as PNG
 //! files beside a converted model: file names, deterministic encoding, and the material references
-//! that point at them.
+//! that point at them; and PNG files decoded back to RGBA (for pictures).
 
 use sinew_scene::{Image, Scene};
 
@@ -52,6 +52,84 @@ pub fn encode_png(image: &Image) -> Result<Vec<u8>, String> {
     Ok(out)
 }
 
+/// Largest side of an image [`decode_png`] accepts.
+pub const MAX_DECODED_SIDE: u32 = 8192;
+
+/// Decodes a PNG file (any colour type and depth) to 8-bit RGBA, named `name`. `None` when it is not
+/// a PNG, is damaged, or has a side above [`MAX_DECODED_SIDE`].
+pub fn decode_png(name: &str, bytes: &[u8]) -> Option<Image> {
+    let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
+    dec.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = dec.read_info().ok()?;
+    let (w, h) = (reader.info().width, reader.info().height);
+    if w == 0 || h == 0 || w > MAX_DECODED_SIDE || h > MAX_DECODED_SIDE {
+        return None;
+    }
+    let mut buf = vec![0; reader.output_buffer_size()?];
+    let frame = reader.next_frame(&mut buf).ok()?;
+    let data = buf.get(..frame.buffer_size())?;
+    let n = w as usize * h as usize;
+    let rgba: Vec<u8> = match frame.color_type {
+        png::ColorType::Rgba => data.to_vec(),
+        png::ColorType::Rgb => data
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect(),
+        png::ColorType::GrayscaleAlpha => data
+            .chunks_exact(2)
+            .flat_map(|p| [p[0], p[0], p[0], p[1]])
+            .collect(),
+        png::ColorType::Grayscale => data.iter().flat_map(|&g| [g, g, g, 255]).collect(),
+        png::ColorType::Indexed => return None,
+    };
+    (rgba.len() == n * 4).then(|| Image {
+        name: name.to_string(),
+        width: w,
+        height: h,
+        rgba,
+    })
+}
+
+/// Decodes a baseline or progressive JPEG file to 8-bit RGBA (zune-jpeg), named `name`. `None` when
+/// it is not a JPEG, is damaged, or has a side above [`MAX_DECODED_SIDE`]; a panic inside the decoder
+/// on a hostile file is caught and is `None` too.
+pub fn decode_jpeg(name: &str, bytes: &[u8]) -> Option<Image> {
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    if !bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        return None;
+    }
+    let side = MAX_DECODED_SIDE as usize;
+    let opts = DecoderOptions::default()
+        .set_max_width(side)
+        .set_max_height(side)
+        .jpeg_set_out_colorspace(ColorSpace::RGBA);
+    let decoded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut dec = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), opts);
+        let pixels = dec.decode().ok()?;
+        let info = dec.info()?;
+        Some((info.width, info.height, dec.output_colorspace()?, pixels))
+    }))
+    .ok()??;
+    let (w, h, space, pixels) = decoded;
+    let n = usize::from(w) * usize::from(h);
+    if w == 0 || h == 0 || space != ColorSpace::RGBA || pixels.len() != n * 4 {
+        return None;
+    }
+    Some(Image {
+        name: name.to_string(),
+        width: u32::from(w),
+        height: u32::from(h),
+        rgba: pixels,
+    })
+}
+
+/// Decodes a PNG or JPEG file (by its first bytes) to RGBA; `None` for anything else.
+pub fn decode_image(name: &str, bytes: &[u8]) -> Option<Image> {
+    decode_png(name, bytes).or_else(|| decode_jpeg(name, bytes))
+}
+
 /// The PNG files for a scene's images, named for `output_stem`, and the scene's materials pointed at
 /// them: `(file name, bytes)` in image order.
 pub fn textures_for_output(
@@ -84,6 +162,17 @@ mod tests {
             height: 1,
             rgba: vec![255, 0, 0, 255, 0, 0, 255, 0],
         }
+    }
+
+    #[test]
+    fn a_png_decodes_to_its_rgba_and_junk_does_not() {
+        let png = encode_png(&image()).unwrap();
+        let back = decode_png("x.png", &png).unwrap();
+        assert_eq!((back.width, back.height), (2, 1));
+        assert_eq!(back.rgba, image().rgba);
+        assert_eq!(back.name, "x.png");
+        assert!(decode_png("x", b"\x89PNG\r\n\x1a\nbroken").is_none());
+        assert!(decode_png("x", &png[..png.len() / 2]).is_none());
     }
 
     #[test]

@@ -99,10 +99,17 @@ pub struct Sidecar {
     pub format: CacheFormat,
     /// File name of the baked input.
     pub source: String,
-    /// Mesh index and name.
+    /// The first mesh baked (kept for readers of sidecars before `meshes`).
     pub mesh: usize,
-    /// Mesh name.
+    /// The names of the meshes baked, joined with ` + `.
     pub mesh_name: String,
+    /// Every mesh baked, in cache order (their vertices one after another). Absent in sidecars
+    /// written before it: `[mesh]`.
+    #[serde(default)]
+    pub meshes: Vec<usize>,
+    /// Their names.
+    #[serde(default)]
+    pub mesh_names: Vec<String>,
     /// LOD index.
     pub lod: usize,
     /// Vertex order.
@@ -145,7 +152,11 @@ impl Sidecar {
             clips: self.requested_clips.clone(),
             layers: self.layers.clone(),
             fps: Some(self.fps),
-            mesh: self.mesh,
+            meshes: if self.meshes.is_empty() {
+                vec![self.mesh]
+            } else {
+                self.meshes.clone()
+            },
             lod: self.lod,
             vertex_order: self.vertex_order,
         }
@@ -261,8 +272,10 @@ pub fn encode(
         generator: "sinew".into(),
         format: opts.format,
         source: source.into(),
-        mesh: request.mesh,
+        mesh: baked.meshes.first().copied().unwrap_or(0),
         mesh_name: baked.mesh_name.clone(),
+        meshes: baked.meshes.clone(),
+        mesh_names: baked.mesh_names.clone(),
         lod: request.lod,
         vertex_order: request.vertex_order,
         vertex_count: f.vertex_count,
@@ -500,9 +513,9 @@ pub fn verify(
     let baked = bake(asset, &request)?;
     if baked.frames.vertex_count != read.vertex_count {
         return Err(VerifyError::Shape(format!(
-            "the cache has {} vertices; mesh {} LOD {} in {} order has {}",
+            "the cache has {} vertices; meshes {:?} LOD {} in {} order have {}",
             read.vertex_count,
-            sidecar.mesh,
+            request.meshes,
             sidecar.lod,
             match sidecar.vertex_order {
                 VertexOrder::Split => "split",

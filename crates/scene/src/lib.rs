@@ -13,6 +13,7 @@
 //! - Every vertex of a mesh carries one normal and, when the source has them, one UV; vertices are split
 //!   where the source gives one position several normals or UVs, and `source_vertex` maps back.
 
+pub use sinew_core::format::{Axes, Axis};
 use sinew_core::{Lod, Skeleton, TrackCurves};
 
 pub use sinew_core;
@@ -39,6 +40,27 @@ pub enum SourceFormat {
 }
 
 impl SourceFormat {
+    /// The format's up axis and the way its models face (docs/formats/): glTF defines Y up, facing
+    /// +Z; MS3D, OBJ and BVH follow the same convention. Half-Life models (MDL, QC) are Z up and face
+    /// +X as the engine plays their sequences, while their bind pose is the reference as modelled,
+    /// facing -Y (studiomdl turns every sequence by 90 degrees about Z, never the reference); an SMD
+    /// alone is not turned: Z up, facing -Y. `None` for `.sinew`, whose file states its own.
+    pub fn axes(self) -> Option<Axes> {
+        let hl = |forward, bind_forward| Axes {
+            up: Axis::PosZ,
+            forward,
+            bind_forward,
+        };
+        match self {
+            SourceFormat::Ms3d | SourceFormat::Gltf | SourceFormat::Obj | SourceFormat::Bvh => {
+                Some(Axes::Y_UP)
+            }
+            SourceFormat::Mdl | SourceFormat::Qc => Some(hl(Axis::PosX, Axis::NegY)),
+            SourceFormat::Smd => Some(hl(Axis::NegY, Axis::NegY)),
+            SourceFormat::Sinew => None,
+        }
+    }
+
     /// Short lowercase name, as reports print it.
     pub fn name(self) -> &'static str {
         match self {
@@ -238,6 +260,8 @@ pub struct Scene {
     pub images: Vec<Image>,
     /// Game data kept from the source (attachments, hit boxes, events...), carried into `GAME`.
     pub game: GameData,
+    /// Up and facing axes of the source ([`SourceFormat::axes`]), carried into `AXES`.
+    pub axes: Option<Axes>,
 }
 
 impl Scene {
@@ -253,6 +277,7 @@ impl Scene {
             masks: Vec::new(),
             images: Vec::new(),
             game: GameData::default(),
+            axes: source_format.axes(),
         }
     }
 

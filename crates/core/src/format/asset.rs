@@ -26,6 +26,8 @@ pub const VERSION_MINOR_COMPACT: u16 = 4;
 /// 4-7: short track tables, packed key times, packed segment entries), which older readers reject.
 /// sinew writes every compressed clip so.
 pub const VERSION_MINOR_SHORT_TRACKS: u16 = 5;
+/// Minor version of files that state their axes (`AXES`, added in 1.6; older readers skip it).
+pub const VERSION_MINOR_AXES: u16 = 6;
 /// Size of the file header in bytes.
 pub const HEADER_SIZE: usize = 48;
 /// Size of a section table entry written by this version (readers accept larger entries).
@@ -60,8 +62,10 @@ impl Tag {
     pub const MASKS: Tag = Tag(*b"MASK");
     /// Game data (attachments, hit boxes, controllers, body groups, skins, clip events; since 1.3).
     pub const GAME: Tag = Tag(*b"GAME");
+    /// Up and facing axes (format 1.6).
+    pub const AXES: Tag = Tag(*b"AXES");
     /// The tags version 1 defines, in the order the writer emits them.
-    pub const KNOWN: [Tag; 8] = [
+    pub const KNOWN: [Tag; 9] = [
         Tag::STRINGS,
         Tag::SKELETON,
         Tag::MATERIALS,
@@ -70,6 +74,7 @@ impl Tag {
         Tag::SOURCE_VERTICES,
         Tag::MASKS,
         Tag::GAME,
+        Tag::AXES,
     ];
 
     /// True for the tags version 1 defines.
@@ -206,6 +211,8 @@ pub struct Asset {
     pub masks: Vec<Mask>,
     /// Game data kept from the source. Written in the GAME section (format 1.3) when not empty.
     pub game: GameData,
+    /// Up and facing axes of the source format. Written in the AXES section (format 1.6) when known.
+    pub axes: Option<super::axes::Axes>,
 }
 
 impl Asset {
@@ -240,6 +247,10 @@ impl Asset {
 pub fn validate(asset: &Asset) -> Result<(), FormatError> {
     let joints = asset.skeleton.as_ref().map(Skeleton::len);
     super::game::check(&asset.game).map_err(|m| FormatError::invalid("GAME", None, m))?;
+    if let Some(a) = asset.axes {
+        super::axes::Axes::new(a.up, a.forward, a.bind_forward)
+            .map_err(|m| FormatError::invalid("AXES", None, m))?;
+    }
     for m in &asset.materials {
         if !m.base_color.iter().all(|v| v.is_finite()) {
             return Err(FormatError::invalid(

@@ -10,6 +10,7 @@
 //! No file I/O happens here: bytes in, plain data out.
 
 mod asset;
+pub mod axes;
 mod error;
 pub mod game;
 mod read;
@@ -19,9 +20,10 @@ mod write;
 pub use asset::{
     validate, Asset, LodInfo, Mask, Material, SectionInfo, SourceVertexMap, Tag, ALIGN,
     HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING, SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR,
-    VERSION_MINOR, VERSION_MINOR_COMPACT, VERSION_MINOR_COMPRESSED, VERSION_MINOR_GAME,
-    VERSION_MINOR_SHORT_TRACKS,
+    VERSION_MINOR, VERSION_MINOR_AXES, VERSION_MINOR_COMPACT, VERSION_MINOR_COMPRESSED,
+    VERSION_MINOR_GAME, VERSION_MINOR_SHORT_TRACKS,
 };
+pub use axes::{Axes, Axis};
 pub use error::{FormatError, FormatErrorKind};
 pub use game::GameData;
 pub use read::{read, sections};

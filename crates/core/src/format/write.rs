@@ -2,8 +2,8 @@
 
 use super::asset::{
     validate, Asset, Material, Tag, ALIGN, HEADER_SIZE, MAGIC, NO_PARENT, NO_STRING,
-    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_GAME,
-    VERSION_MINOR_SHORT_TRACKS,
+    SECTION_ENTRY_SIZE, SECTION_VERSION, VERSION_MAJOR, VERSION_MINOR, VERSION_MINOR_AXES,
+    VERSION_MINOR_GAME, VERSION_MINOR_SHORT_TRACKS,
 };
 use super::error::FormatError;
 use crate::clip::Channel;
@@ -12,7 +12,7 @@ use crate::{Clip, Mesh, Skeleton};
 use std::collections::HashMap;
 
 /// Encodes an asset as a `.sinew` file, version 1.1 (1.3 with game data, 1.5 with compressed clips,
-/// whose records use 1.5's layouts).
+/// whose records use 1.5's layouts, 1.6 when it states its axes).
 ///
 /// The output depends only on the asset: the same asset gives the same bytes. Fails (without writing
 /// anything) when the asset breaks a rule of [`validate`], so whatever this accepts, [`super::read`]
@@ -42,9 +42,19 @@ pub fn write(asset: &Asset) -> Result<Vec<u8>, FormatError> {
     if !asset.game.is_empty() {
         sections.push((Tag::GAME, game(&asset.game, &mut strings)));
     }
+    if let Some(a) = asset.axes {
+        // up, forward, bind forward, then 13 reserved zero bytes: 16 in all.
+        let mut b = vec![0u8; 16];
+        b[0] = a.up.code();
+        b[1] = a.forward.code();
+        b[2] = a.bind_forward.code();
+        sections.push((Tag::AXES, b));
+    }
     sections.insert(0, (Tag::STRINGS, strings.encode()?));
     // Every compressed record is written in the 1.5 layout (packed segment entries at least).
-    let minor = if asset.clips.iter().any(Clip::is_compressed) {
+    let minor = if asset.axes.is_some() {
+        VERSION_MINOR_AXES
+    } else if asset.clips.iter().any(Clip::is_compressed) {
         VERSION_MINOR_SHORT_TRACKS
     } else if !asset.game.is_empty() {
         VERSION_MINOR_GAME

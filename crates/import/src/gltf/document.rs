@@ -343,6 +343,59 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
     Ok(Loaded { doc, buffers })
 }
 
+/// Largest image [`embedded_images`] returns.
+pub const MAX_EMBEDDED_IMAGE: usize = 64 << 20;
+
+/// The images stored inside a glTF file (in a buffer view, or a `data:` URI), as `(key, bytes)` with
+/// the key materials use for them (`images[N]`, see the importer's materials). Images stored in files
+/// beside it are not included (their materials name the file). An image whose bytes lie outside its
+/// buffer, or larger than [`MAX_EMBEDDED_IMAGE`], is left out; a file that does not load is an error.
+pub fn embedded_images(
+    file: &str,
+    bytes: &[u8],
+    resolve: Resolver<'_>,
+) -> Result<Vec<(String, Vec<u8>)>, ImportError> {
+    let l = load(file, bytes, resolve)?;
+    let mut out = Vec::new();
+    for img in l.doc.images() {
+        let data = match img.source() {
+            gltf::image::Source::View { view, .. } => {
+                let Some(buffer) = l.buffers.get(view.buffer().index()) else {
+                    continue;
+                };
+                let range = view
+                    .offset()
+                    .checked_add(view.length())
+                    .map(|end| view.offset()..end);
+                match range.and_then(|r| buffer.get(r)) {
+                    Some(b) => b.to_vec(),
+                    None => continue,
+                }
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let Some(payload) = uri
+                    .strip_prefix("data:")
+                    .and_then(|r| r.split_once(";base64,"))
+                    .map(|(_, p)| p)
+                else {
+                    continue;
+                };
+                if payload.len() / 4 * 3 > MAX_EMBEDDED_IMAGE {
+                    continue;
+                }
+                match base64_decode(payload) {
+                    Some(b) => b,
+                    None => continue,
+                }
+            }
+        };
+        if data.len() <= MAX_EMBEDDED_IMAGE {
+            out.push((format!("images[{}]", img.index()), data));
+        }
+    }
+    Ok(out)
+}
+
 /// Number of skins in a glTF file, so that a caller can import each one with
 /// [`ImportOptions::gltf_skin`].
 pub fn skin_count(file_name: &str, bytes: &[u8]) -> Result<usize, ImportError> {

@@ -15,5 +15,5 @@ mod refs;
 mod skin;
 
 pub use build::import;
-pub use document::{json_path_at, skin_count};
+pub use document::{embedded_images, json_path_at, skin_count, MAX_EMBEDDED_IMAGE};
 pub use mesh::generate_normals;

@@ -1,6 +1,7 @@
-//! A studio model to a sinew scene: skeleton, the default body as the first mesh and the other body
-//! choices as meshes of their own, one material per texture (with its image), one clip per sequence
-//! and blend, and everything else as game data. docs/formats/halflife.md describes each rule.
+//! A studio model to a sinew scene: skeleton, every body-part choice (submodel) as a mesh of its own,
+//! the body groups that say which meshes make a body, one material per texture (with its image), one
+//! clip per sequence and blend, and everything else as game data. docs/formats/halflife.md describes
+//! each rule.
 
 use super::model::{StudioModel, StudioSequence, StudioTexture, Submodel};
 use crate::ImportError;
@@ -86,7 +87,7 @@ fn base_name(name: &str) -> &str {
     name.rsplit(['/', '\\']).next().unwrap_or(name)
 }
 
-/// Builds the scene. `model_name` names the default body's mesh.
+/// Builds the scene. `model_name` names the mesh of a model that has a single submodel.
 pub fn build_scene(
     file: &str,
     model_name: &str,
@@ -168,15 +169,15 @@ pub fn build_scene(
     };
     let mut used: Vec<String> = Vec::new();
 
-    // Meshes: the default choice of every body part merged into the first mesh, then the others.
+    // Meshes: every non-blank submodel in body-part order, each its own mesh named `part/submodel`
+    // (the body groups say which make a body; a model with a single submodel names it after the file).
     let part_names = unique_names(
         model.body_parts.iter().map(|p| p.name.clone()),
         "bodypart",
         "body part",
         &mut diagnostics,
     );
-    let mut defaults: Vec<&Submodel> = Vec::new();
-    let mut others: Vec<(String, &Submodel)> = Vec::new();
+    let mut subs: Vec<(String, &Submodel)> = Vec::new();
     let mut groups = Vec::new();
     for (part, pname) in model.body_parts.iter().zip(&part_names) {
         let mut entries = Vec::new();
@@ -188,18 +189,14 @@ pub fn build_scene(
             "submodel",
             &mut diagnostics,
         );
-        for (k, (sub, sname)) in part.submodels.iter().zip(&sub_names).enumerate() {
+        for (sub, sname) in part.submodels.iter().zip(&sub_names) {
             let full = format!("{pname}/{sname}");
             if sub.vertices.is_empty() {
                 entries.push(String::new());
                 continue;
             }
             entries.push(full.clone());
-            if k == 0 {
-                defaults.push(sub);
-            } else {
-                others.push((full, sub));
-            }
+            subs.push((full, sub));
         }
         groups.push(BodyGroup {
             name: pname.clone(),
@@ -207,19 +204,10 @@ pub fn build_scene(
         });
     }
     let skinned = scene.skeleton.is_some();
-    if !defaults.is_empty() {
-        let mesh = build_mesh(
-            model_name,
-            &defaults,
-            &joint_of,
-            skinned,
-            &slot_material,
-            &mut used,
-        );
-        scene.meshes.push(mesh);
-    }
-    for (name, sub) in others {
-        let mesh = build_mesh(&name, &[sub], &joint_of, skinned, &slot_material, &mut used);
+    let single = subs.len() == 1;
+    for (name, sub) in subs {
+        let name = if single { model_name } else { name.as_str() };
+        let mesh = build_mesh(name, &[sub], &joint_of, skinned, &slot_material, &mut used);
         scene.meshes.push(mesh);
     }
     // Slots with no texture still need a material.

@@ -411,6 +411,25 @@ fn readings_differ(anim: &Anim<'_>, size: f32) -> bool {
     })
 }
 
+/// Below this margin (`|score difference| / larger score`) the two readings are too close to call:
+/// `auto` keeps Milkshape's own viewer rule, with a warning.
+const SMALL_MARGIN: f32 = 0.3;
+
+/// The reading `rule` picks from the two scores (lower is more plausible), the other, and the margin.
+/// `auto` takes the parent reading only when its score is lower by at least [`SMALL_MARGIN`]: on a
+/// near tie the format's own (viewer) rule wins.
+fn choose(rule: PositionKeyRule, sv: f32, sp: f32) -> (PositionKeyRule, PositionKeyRule, f32) {
+    let hi = sv.max(sp);
+    let margin = if hi > 0.0 { (sv - sp).abs() / hi } else { 0.0 };
+    let (v, p) = (PositionKeyRule::Viewer, PositionKeyRule::Parent);
+    let pair = match rule {
+        PositionKeyRule::Auto if sp < sv && margin >= SMALL_MARGIN => (p, v),
+        PositionKeyRule::Parent => (p, v),
+        _ => (v, p),
+    };
+    (pair.0, pair.1, margin)
+}
+
 fn decide(
     anim: &Anim<'_>,
     influences: Option<&[Influences]>,
@@ -449,25 +468,14 @@ fn decide(
     viewer.max_gap = gap;
     parent.max_gap = gap;
     let (sv, sp) = (viewer.score(), parent.score());
-    let (chosen, other) = match rule {
-        PositionKeyRule::Auto => {
-            if sp < sv {
-                (PositionKeyRule::Parent, PositionKeyRule::Viewer)
-            } else {
-                (PositionKeyRule::Viewer, PositionKeyRule::Parent)
-            }
-        }
-        PositionKeyRule::Viewer => (PositionKeyRule::Viewer, PositionKeyRule::Parent),
-        PositionKeyRule::Parent => (PositionKeyRule::Parent, PositionKeyRule::Viewer),
-    };
-    let hi = sv.max(sp);
-    let margin = if hi > 0.0 { (sv - sp).abs() / hi } else { 0.0 };
+    let (chosen, other, margin) = choose(rule, sv, sp);
     let formula = |r| match r {
         PositionKeyRule::Parent => "t0 + tkey",
         _ => "t0 + R0*tkey",
     };
     let (message, warn) = if rule == PositionKeyRule::Auto {
-        let warn = margin < 0.3;
+        let warn = margin < SMALL_MARGIN;
+        let kept = warn && sp < sv;
         (
             format!(
                 "position keys on rotated joints read as {} ({}): implausibility score {:.4} against {:.4} for {}{}; override with --ms3d-position-keys {}",
@@ -476,7 +484,13 @@ fn decide(
                 if chosen == PositionKeyRule::Viewer { sv } else { sp },
                 if chosen == PositionKeyRule::Viewer { sp } else { sv },
                 rule_name(other),
-                if warn { " (small margin)" } else { "" },
+                if kept {
+                    " (small margin: Milkshape's own viewer rule is kept over the slightly lower score)"
+                } else if warn {
+                    " (small margin)"
+                } else {
+                    ""
+                },
                 rule_name(other),
             ),
             warn,
@@ -686,5 +700,26 @@ fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
         (Vec3::ZERO, Vec3::ZERO)
     } else {
         (mn, mx)
+    }
+}
+
+#[cfg(test)]
+mod choose_tests {
+    use crate::ms3d::anim::{choose, PositionKeyRule as R};
+
+    #[test]
+    fn a_near_tie_keeps_the_viewer_rule_and_a_clear_win_does_not() {
+        // Dophi.ms3d's scores: parent 0.0285, viewer 0.0303 (margin 0.06): viewer.
+        let (chosen, other, margin) = choose(R::Auto, 0.0303, 0.0285);
+        assert_eq!((chosen, other), (R::Viewer, R::Parent));
+        assert!((margin - 0.0594).abs() < 1e-3, "{margin}");
+        // A clear parent win (the Biped root-motion fixture's kind): parent.
+        assert_eq!(choose(R::Auto, 0.5, 0.1).0, R::Parent);
+        // Exactly at the margin counts as clear.
+        assert_eq!(choose(R::Auto, 1.0, 0.7).0, R::Parent);
+        assert_eq!(choose(R::Auto, 0.1, 0.5).0, R::Viewer);
+        // Explicit rules are obeyed whatever the scores.
+        assert_eq!(choose(R::Parent, 0.1, 0.5).0, R::Parent);
+        assert_eq!(choose(R::Viewer, 0.5, 0.1).0, R::Viewer);
     }
 }

@@ -89,7 +89,8 @@ impl CompressOptions {
 pub struct ClipCompressionReport {
     /// Clip name.
     pub clip: String,
-    /// Raw size: 40 bytes (10 f32: translation 3, rotation 4, scale 3) per animated joint per source key.
+    /// Raw size: 40 bytes (10 f32: translation 3, rotation 4, scale 3) per animated joint per source key;
+    /// for a clip with no animated channel (a single pose), per joint it drives.
     pub raw_bytes: usize,
     /// Size of the plain (f32) clip record in the `.sinew` file.
     pub plain_bytes: usize,

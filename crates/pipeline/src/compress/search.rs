@@ -612,7 +612,22 @@ pub fn compress_clip(
         })
         .count();
     let samples = source.times().len();
-    let raw_bytes = 40 * animated_joints * samples;
+    // A clip without an animated channel (a single pose: one key, or every channel constant) still
+    // stores one pose of each joint it drives: that is its raw size, not 0.
+    let posed_joints = if animated_joints > 0 {
+        animated_joints
+    } else {
+        source
+            .tracks()
+            .iter()
+            .filter(|t| {
+                !matches!(t.translation, Channel::Bind)
+                    || !matches!(t.rotation, Channel::Bind)
+                    || !matches!(t.scale, Channel::Bind)
+            })
+            .count()
+    };
+    let raw_bytes = 40 * posed_joints * samples;
     let report = ClipCompressionReport {
         clip: clip.name().to_owned(),
         raw_bytes,

@@ -3,15 +3,16 @@
 //! others behind `MSFT_lod`), every clip as an animation sampled through the runtime, and what glTF has
 //! no place for in `extras`. Decisions: docs/export.md.
 
-use super::animation::{rotations, sample_clip, scales, translations, unit};
+use super::animation::{key_clip, tolerances, unit, KeyedClip};
 use super::buffer::{Bin, Use};
+use crate::body::{self, BodyChoice};
 use gltf_json as json;
 use json::accessor::Type;
 use json::validation::Checked::Valid;
 use json::Index;
 use serde_json::{json as js, Map, Value};
 use sinew_core::format::Asset;
-use sinew_core::glam::Mat4;
+use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{Lod, Skeleton};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -37,18 +38,23 @@ pub struct ExportImage {
 pub struct ExportReport {
     /// Joint nodes.
     pub joints: usize,
-    /// glTF meshes of LOD 0 (one per exported sinew mesh).
+    /// glTF meshes of the model in the default scene (LOD 0 of each mesh of its body).
     pub meshes: usize,
-    /// Further glTF meshes holding LODs 1 and up (behind `MSFT_lod`).
+    /// Further glTF meshes holding LODs 1 and up (`--variants`: behind `MSFT_lod`, in scenes
+    /// `LOD 1` ...).
     pub lod_meshes: usize,
+    /// LOD 0 of the meshes outside the model's body (`--variants`: each in a scene of its own).
+    pub other_meshes: usize,
+    /// glTF scenes (1 without `--variants`).
+    pub scenes: usize,
     /// Materials.
     pub materials: usize,
     /// Embedded images.
     pub images: usize,
     /// Animations (one per exported clip).
     pub animations: usize,
-    /// Frames over all animations.
-    pub frames: usize,
+    /// Keys over all channels of all animations.
+    pub keys: usize,
     /// One sentence per thing left out (a clip that drives no joint, a texture not found...).
     pub notes: Vec<String>,
 }
@@ -67,9 +73,21 @@ pub struct Built {
 /// The generator string written in `asset.generator`.
 pub const GENERATOR: &str = concat!("sinew ", env!("CARGO_PKG_VERSION"));
 
-/// Builds the document. `images` are matched to materials by [`ExportImage::key`]; `game` is the
-/// file's game data as JSON (written under `extras.sinew.game`), when the caller has it.
-pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Built {
+/// Options of one export.
+#[derive(Debug, Clone, Default)]
+pub struct ExportOptions {
+    /// The file's game data as JSON, written under `extras.sinew.game` (the CLI passes the same object
+    /// `inspect --json` prints).
+    pub game: Option<Value>,
+    /// The meshes that make the model in the default scene, or `None` for the default body
+    /// ([`crate::body`]).
+    pub meshes: Option<Vec<usize>>,
+    /// Also write every other mesh and every LOD, each in a scene of its own.
+    pub variants: bool,
+}
+
+/// Builds the document. `images` are matched to materials by [`ExportImage::key`].
+pub fn build(asset: &Asset, images: &[ExportImage], options: &ExportOptions) -> Built {
     let mut b = Builder {
         root: json::Root::default(),
         bin: Bin::default(),
@@ -85,10 +103,10 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
         .clone()
         .filter(|s| !s.is_empty())
         .map(Arc::new);
-    let mut scene_nodes = Vec::new();
+    let mut roots = Vec::new();
     let mut skin = None;
     if let Some(s) = &skeleton {
-        let mut roots = b.joints(s);
+        roots = b.joints(s);
         if roots.len() > 1 {
             // glTF wants the joints of a skin under one common root: a plain node (not a joint,
             // identity transform) holds the skeleton's roots.
@@ -100,14 +118,31 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
             roots = vec![holder];
         }
         skin = Some(b.skin(s, &roots));
-        scene_nodes.extend(roots);
     }
     let textures = b.textures(asset, images);
     let materials = b.materials(asset, &textures, images);
+    let model: Vec<usize> = match &options.meshes {
+        Some(m) => m
+            .iter()
+            .copied()
+            .filter(|&i| i < asset.meshes.len())
+            .collect(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    // Per mesh: its nodes by LOD level (LOD 0 first).
+    let mut mesh_nodes: Vec<Vec<(usize, Index<json::Node>)>> = vec![Vec::new(); asset.meshes.len()];
     let mut lods_used = false;
-    for (mi, mesh) in asset.meshes.iter().enumerate() {
+    let in_model = |mi: &usize| model.contains(mi);
+    let order: Vec<usize> = model
+        .iter()
+        .copied()
+        .chain((0..asset.meshes.len()).filter(|mi| options.variants && !in_model(mi)))
+        .collect();
+    for mi in order {
+        let mesh = &asset.meshes[mi];
+        let levels = if options.variants { mesh.lods.len() } else { 1 };
         let mut nodes = Vec::new();
-        for (level, lod) in mesh.lods.iter().enumerate() {
+        for (level, lod) in mesh.lods.iter().enumerate().take(levels) {
             let name = if level == 0 {
                 mesh.name.clone()
             } else {
@@ -138,34 +173,108 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
                     }
                 }));
                 b.report.lod_meshes += 1;
-            } else {
+            } else if in_model(&mi) {
                 b.report.meshes += 1;
+            } else {
+                b.report.other_meshes += 1;
             }
-            nodes.push(b.root.push(json::Node {
-                mesh: Some(m),
-                name: Some(name),
-                skin: if skinned { skin } else { None },
-                ..Default::default()
-            }));
+            nodes.push((
+                level,
+                b.root.push(json::Node {
+                    mesh: Some(m),
+                    name: Some(name),
+                    skin: if skinned { skin } else { None },
+                    ..Default::default()
+                }),
+            ));
         }
-        let Some((&first, rest)) = nodes.split_first() else {
-            continue;
-        };
-        if !rest.is_empty() {
-            lods_used = true;
-            let mut others = Map::new();
-            others.insert(
-                "MSFT_lod".to_string(),
-                js!({ "ids": rest.iter().map(|n| n.value()).collect::<Vec<_>>() }),
-            );
-            b.root.nodes[first.value()].extensions = Some(json::extensions::scene::Node { others });
+        if let Some((&(_, first), rest)) = nodes.split_first() {
+            if !rest.is_empty() {
+                lods_used = true;
+                let mut others = Map::new();
+                others.insert(
+                    "MSFT_lod".to_string(),
+                    js!({ "ids": rest.iter().map(|(_, n)| n.value()).collect::<Vec<_>>() }),
+                );
+                b.root.nodes[first.value()].extensions =
+                    Some(json::extensions::scene::Node { others });
+            }
         }
-        scene_nodes.push(first);
+        mesh_nodes[mi] = nodes;
     }
     if lods_used {
         b.root.extensions_used.push("MSFT_lod".to_string());
     }
+    // Scene 0: the model at LOD 0. With variants: the model at each further LOD, then each other
+    // mesh, every scene with the skeleton.
+    let scene = |name: String, nodes: Vec<Index<json::Node>>| json::Scene {
+        extensions: None,
+        extras: Default::default(),
+        name: Some(name),
+        nodes: roots.iter().copied().chain(nodes).collect(),
+    };
+    let at_level = |mi: usize, level: usize| {
+        mesh_nodes[mi]
+            .iter()
+            .find(|(l, _)| *l == level)
+            .map(|(_, n)| *n)
+    };
+    let mut scenes = vec![scene(
+        "sinew".to_string(),
+        model.iter().filter_map(|&mi| at_level(mi, 0)).collect(),
+    )];
+    if options.variants {
+        let top = model
+            .iter()
+            .map(|&mi| asset.meshes[mi].lods.len())
+            .max()
+            .unwrap_or(0);
+        for level in 1..top {
+            // A mesh whose level was not built (lods_not_built) shows its last level, so the
+            // scene is the whole model at that level.
+            let nodes: Vec<_> = model
+                .iter()
+                .filter_map(|&mi| {
+                    let last = asset.meshes[mi].lods.len().saturating_sub(1);
+                    at_level(mi, level.min(last))
+                })
+                .collect();
+            if !nodes.is_empty() {
+                scenes.push(scene(format!("LOD {level}"), nodes));
+            }
+        }
+        for (mi, mesh) in asset.meshes.iter().enumerate() {
+            if !in_model(&mi) {
+                if let Some(n) = at_level(mi, 0) {
+                    scenes.push(scene(mesh.name.clone(), vec![n]));
+                }
+            }
+        }
+    } else {
+        let others: Vec<&str> = (0..asset.meshes.len())
+            .filter(|mi| !in_model(mi))
+            .map(|mi| asset.meshes[mi].name.as_str())
+            .collect();
+        if !others.is_empty() {
+            b.report.notes.push(format!(
+                "{} meshes outside the model's body are not exported ({}); --variants writes each in a scene of its own",
+                others.len(),
+                others.join(", ")
+            ));
+        }
+        let lods: usize = model
+            .iter()
+            .map(|&mi| asset.meshes[mi].lods.len().saturating_sub(1))
+            .sum();
+        if lods > 0 {
+            b.report.notes.push(format!(
+                "{lods} LOD meshes are not exported; --variants writes them behind MSFT_lod and in scenes of their own"
+            ));
+        }
+    }
+    b.report.scenes = scenes.len();
     let mut clips = Vec::new();
+    let tol = tolerances(asset);
     for clip in &asset.clips {
         let mut entry = js!({
             "name": clip.name(),
@@ -183,12 +292,12 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
                 ));
                 entry["animation"] = Value::Null;
             }
-            Some(s) => match sample_clip(s, clip) {
-                Ok(sampled) => {
+            Some(s) => match key_clip(s, clip, &tol) {
+                Ok(keyed) => {
                     entry["animation"] = js!(b.root.animations.len());
-                    entry["fps"] = js!(sampled.fps);
-                    entry["unbound_tracks"] = js!(sampled.unbound);
-                    b.animation(clip.name(), &sampled);
+                    entry["keys"] = js!(keyed.key_count());
+                    entry["unbound_tracks"] = js!(keyed.unbound);
+                    b.animation(clip.name(), &keyed);
                 }
                 Err(e) => {
                     b.report.notes.push(format!("{e}; not exported"));
@@ -215,16 +324,22 @@ pub fn build(asset: &Asset, images: &[ExportImage], game: Option<Value>) -> Buil
         })).collect::<Vec<_>>(),
         "notes": b.report.notes,
     });
-    if let Some(g) = game {
-        sinew["game"] = g;
+    if let Some(g) = &options.game {
+        sinew["game"] = g.clone();
     }
+    if let Some(a) = asset.axes {
+        sinew["axes"] = js!({
+            "up": a.up.name(),
+            "forward": a.forward.name(),
+            "bind_forward": a.bind_forward.name(),
+        });
+    }
+    sinew["body"] = js!(model
+        .iter()
+        .map(|&mi| asset.meshes[mi].name.as_str())
+        .collect::<Vec<_>>());
     b.root.extras = raw(&js!({ "sinew": sinew }));
-    b.root.scenes.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: Some("sinew".to_string()),
-        nodes: scene_nodes,
-    });
+    b.root.scenes = scenes;
     b.root.scene = Some(Index::new(0));
     Built {
         root: b.root,
@@ -448,7 +563,7 @@ impl Builder {
                 .iter()
                 .flat_map(|v| {
                     let u = v.normalize_or_zero();
-                    if u == sinew_core::glam::Vec3::ZERO {
+                    if u == Vec3::ZERO {
                         [0.0, 1.0, 0.0]
                     } else {
                         u.to_array()
@@ -502,29 +617,58 @@ impl Builder {
         }))
     }
 
-    /// One animation: a shared time accessor and a translation, rotation and scale channel per
-    /// driven joint (joint node index = joint index).
-    fn animation(&mut self, name: &str, s: &super::animation::SampledClip) {
-        let input = self
-            .bin
-            .floats(&mut self.root, &s.times, Type::Scalar, Use::Other, true);
+    /// One animation: per driven joint a translation, rotation and scale channel, each with its own
+    /// keys (joint node index = joint index); channels with the same key times share one time
+    /// accessor.
+    fn animation(&mut self, name: &str, k: &KeyedClip) {
+        let mut inputs: BTreeMap<Vec<u32>, Index<json::Accessor>> = BTreeMap::new();
         let mut channels = Vec::new();
         let mut samplers = Vec::new();
-        for (&joint, track) in s.joints.iter().zip(&s.poses) {
+        for (&joint, keys) in k.joints.iter().zip(&k.channels) {
             let parts = [
                 (
                     json::animation::Property::Translation,
-                    translations(track),
+                    &keys.translation.times,
+                    keys.translation
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect::<Vec<f32>>(),
                     Type::Vec3,
                 ),
                 (
                     json::animation::Property::Rotation,
-                    rotations(track),
+                    &keys.rotation.times,
+                    keys.rotation
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect(),
                     Type::Vec4,
                 ),
-                (json::animation::Property::Scale, scales(track), Type::Vec3),
+                (
+                    json::animation::Property::Scale,
+                    &keys.scale.times,
+                    keys.scale
+                        .values
+                        .iter()
+                        .flat_map(|v| v.to_array())
+                        .collect(),
+                    Type::Vec3,
+                ),
             ];
-            for (path, values, ty) in parts {
+            for (path, times, values, ty) in parts {
+                let bits: Vec<u32> = times.iter().map(|t| t.to_bits()).collect();
+                let input = match inputs.get(&bits) {
+                    Some(&a) => a,
+                    None => {
+                        let a =
+                            self.bin
+                                .floats(&mut self.root, times, Type::Scalar, Use::Other, true);
+                        inputs.insert(bits, a);
+                        a
+                    }
+                };
                 let output = self
                     .bin
                     .floats(&mut self.root, &values, ty, Use::Other, false);
@@ -550,7 +694,7 @@ impl Builder {
             }
         }
         self.report.animations += 1;
-        self.report.frames += s.times.len();
+        self.report.keys += k.key_count();
         self.root.push(json::Animation {
             extensions: None,
             extras: Default::default(),

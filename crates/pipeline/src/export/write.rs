@@ -1,16 +1,8 @@
 //! The export entry point: build the document from an asset and pack it as GLB or `.gltf` bytes.
 
 use super::container::{pack, Container};
-use super::document::{build, ExportImage, ExportReport};
+use super::document::{build, ExportImage, ExportOptions, ExportReport};
 use sinew_core::format::Asset;
-
-/// Options of one export.
-#[derive(Debug, Clone, Default)]
-pub struct ExportOptions {
-    /// The file's game data as JSON, written under `extras.sinew.game` (the CLI passes the same object
-    /// `inspect --json` prints).
-    pub game: Option<serde_json::Value>,
-}
 
 /// Exports `asset` (with `images` embedded where materials name them) as glTF bytes. Deterministic:
 /// the same inputs give the same bytes.
@@ -20,7 +12,7 @@ pub fn export(
     container: Container,
     options: &ExportOptions,
 ) -> Result<(Vec<u8>, ExportReport), String> {
-    let built = build(asset, images, options.game.clone());
+    let built = build(asset, images, options);
     let bytes = pack(built.root, &built.bin, container)?;
     Ok((bytes, built.report))
 }

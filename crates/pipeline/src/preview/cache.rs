@@ -1,7 +1,7 @@
 //! The picture of a baked cache (`sinew bake --preview`): a strip of frames spread over the cache,
 //! drawn from the positions the cache file holds (read back from its bytes), with the mesh's triangles.
 
-use super::camera::{Fit, Up, View};
+use super::camera::{Facing, Fit, View};
 use super::canvas::{Canvas, Cell, Rgb};
 use super::model::{draw_meshes, Posed, INK};
 use super::sheet::{CAPTION, CELL, TITLE};
@@ -41,7 +41,7 @@ pub fn strip_frames(count: usize) -> Vec<usize> {
 pub fn cache_strip(
     frames: &Frames,
     indices: &[u32],
-    up: Up,
+    facing: Facing,
     title: &str,
     label: impl Fn(usize) -> String,
 ) -> Result<(Vec<u8>, CacheStripReport), String> {
@@ -96,8 +96,8 @@ pub fn cache_strip(
             &c,
             INK,
         );
-        let fit = Fit::new(View::front(up), points.iter().copied(), cell, 12.0);
-        draw_meshes(&mut canvas, &asset, p, 0, &fit, cell);
+        let fit = Fit::new(View::front(facing), points.iter().copied(), cell, 12.0);
+        draw_meshes(&mut canvas, &asset, p, 0, &fit, cell, &Default::default());
     }
     let png = canvas.png()?;
     Ok((
@@ -113,6 +113,7 @@ pub fn cache_strip(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::preview::camera::Up;
     use sinew_core::glam::Vec3;
 
     #[test]
@@ -136,7 +137,7 @@ mod tests {
             normals: Vec::new(),
         };
         let (png, r) =
-            cache_strip(&frames, &[0, 1, 2], Up::Y, "t", |f| format!("{f}")).expect("strip");
+            cache_strip(&frames, &[0, 1, 2], Up::Y.into(), "t", |f| format!("{f}")).expect("strip");
         assert_eq!(r.frames, vec![0, 1, 2, 3]);
         assert_eq!((r.width, r.height), (4 * CELL, TITLE + CAPTION + CELL + 8));
         assert!(png.starts_with(b"\x89PNG"));
@@ -144,6 +145,6 @@ mod tests {
             frame_count: 5,
             ..frames
         };
-        assert!(cache_strip(&bad, &[0, 1, 2], Up::Y, "t", |f| format!("{f}")).is_err());
+        assert!(cache_strip(&bad, &[0, 1, 2], Up::Y.into(), "t", |f| format!("{f}")).is_err());
     }
 }

@@ -2,6 +2,7 @@
 //! set of points into a pixel cell.
 
 use super::canvas::Cell;
+use sinew_core::format::{Axes, Axis};
 use sinew_core::glam::Vec3;
 
 /// The model's up axis (sinew keeps the source's axes: glTF, MS3D, BVH and OBJ are Y-up, Half-Life
@@ -12,6 +13,47 @@ pub enum Up {
     Y,
     /// +Z is up; the front view looks down -X (Half-Life models face +X).
     Z,
+}
+
+/// Which way is up and which way the model faces (unit axes, perpendicular).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Facing {
+    /// Up.
+    pub up: Vec3,
+    /// The direction the model's front looks along.
+    pub forward: Vec3,
+}
+
+impl Facing {
+    /// From two axes (the caller keeps them perpendicular, as [`Axes::new`] does).
+    pub fn from_axes(up: Axis, forward: Axis) -> Facing {
+        Facing {
+            up: Vec3::from_array(up.vector()),
+            forward: Vec3::from_array(forward.vector()),
+        }
+    }
+
+    /// The facing of a model's clips (`bind == false`) or of its bind pose (`bind == true`).
+    pub fn of(axes: Axes, bind: bool) -> Facing {
+        Facing::from_axes(
+            axes.up,
+            if bind {
+                axes.bind_forward
+            } else {
+                axes.forward
+            },
+        )
+    }
+}
+
+impl From<Up> for Facing {
+    /// The convention of each up axis: Y up facing +Z (glTF), Z up facing +X (Half-Life).
+    fn from(up: Up) -> Facing {
+        match up {
+            Up::Y => Facing::from_axes(Axis::PosY, Axis::PosZ),
+            Up::Z => Facing::from_axes(Axis::PosZ, Axis::PosX),
+        }
+    }
 }
 
 /// A view direction: screen right, screen up, and the direction towards the viewer.
@@ -26,35 +68,21 @@ pub struct View {
 }
 
 impl View {
-    /// Looking at the model's front.
-    pub fn front(up: Up) -> View {
-        match up {
-            Up::Y => View {
-                right: Vec3::X,
-                up: Vec3::Y,
-                toward: Vec3::Z,
-            },
-            Up::Z => View {
-                right: Vec3::Y,
-                up: Vec3::Z,
-                toward: Vec3::X,
-            },
+    /// Looking at the model's front: the viewer stands ahead of it, up is up.
+    pub fn front(f: Facing) -> View {
+        View {
+            right: f.up.cross(f.forward),
+            up: f.up,
+            toward: f.forward,
         }
     }
 
-    /// Looking at the model's left side (its front points to the screen's right).
-    pub fn side(up: Up) -> View {
-        match up {
-            Up::Y => View {
-                right: Vec3::Z,
-                up: Vec3::Y,
-                toward: -Vec3::X,
-            },
-            Up::Z => View {
-                right: Vec3::X,
-                up: Vec3::Z,
-                toward: -Vec3::Y,
-            },
+    /// Looking at the model's side, its front pointing to the screen's right.
+    pub fn side(f: Facing) -> View {
+        View {
+            right: f.forward,
+            up: f.up,
+            toward: -f.up.cross(f.forward),
         }
     }
 }
@@ -138,7 +166,7 @@ mod tests {
             h: 100,
         };
         let pts = [Vec3::new(-1.0, 0.0, 0.0), Vec3::new(1.0, 2.0, 0.0)];
-        let f = Fit::new(View::front(Up::Y), pts, cell, 10.0);
+        let f = Fit::new(View::front(Up::Y.into()), pts, cell, 10.0);
         // Height 2 into 80 pixels: 40 px per unit; the top point is 10 px below the cell's top.
         let top = f.project(Vec3::new(1.0, 2.0, 0.0));
         assert_eq!((top.x, top.y), (240.0, 10.0));
@@ -153,7 +181,7 @@ mod tests {
     #[test]
     fn side_view_of_a_z_up_model_shows_its_front_to_the_right() {
         let f = Fit::new(
-            View::side(Up::Z),
+            View::side(Up::Z.into()),
             [Vec3::ZERO, Vec3::new(1.0, 0.0, 1.0)],
             Cell {
                 x: 0,
@@ -164,5 +192,20 @@ mod tests {
             0.0,
         );
         assert!(f.project(Vec3::X).x > f.project(Vec3::ZERO).x);
+    }
+
+    #[test]
+    fn views_from_facings_match_the_conventions() {
+        // Y up facing +Z: the front view has +X to the right and +Z towards the viewer.
+        let v = View::front(Up::Y.into());
+        assert_eq!((v.right, v.up, v.toward), (Vec3::X, Vec3::Y, Vec3::Z));
+        let v = View::side(Up::Y.into());
+        assert_eq!((v.right, v.up, v.toward), (Vec3::Z, Vec3::Y, -Vec3::X));
+        // Z up facing +X (Half-Life as it plays): +Y to the right, +X towards the viewer.
+        let v = View::front(Up::Z.into());
+        assert_eq!((v.right, v.up, v.toward), (Vec3::Y, Vec3::Z, Vec3::X));
+        // A Half-Life bind pose faces -Y: the front view looks at it from -Y.
+        let v = View::front(Facing::from_axes(Axis::PosZ, Axis::NegY));
+        assert_eq!((v.right, v.up, v.toward), (Vec3::X, Vec3::Z, -Vec3::Y));
     }
 }

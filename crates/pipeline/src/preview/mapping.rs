@@ -82,7 +82,7 @@ fn layout(side: &Side<'_>, cell: Cell) -> (Placed, Vec<(usize, usize)>) {
                 return (Vec::new(), Vec::new());
             }
             let pts: Vec<Vec3> = models.iter().map(|m| m.w_axis.truncate()).collect();
-            let fit = Fit::new(View::front(side.up), pts.iter().copied(), cell, 40.0);
+            let fit = Fit::new(View::front(side.up.into()), pts.iter().copied(), cell, 40.0);
             let pos = s
                 .names()
                 .iter()

@@ -2,7 +2,9 @@
 //! pose from the front and side with its skeleton, poses across each clip, each LOD beside LOD 0) and
 //! pictures of joint mappings. The same inputs give the same PNG bytes.
 //!
-//! - [`canvas`]: pixels, z-buffered flat triangles (our own rasteriser), lines and dots (tiny-skia), PNG;
+//! - [`canvas`]: pixels, z-buffered flat and textured triangles (our own rasteriser), lines and dots
+//!   (tiny-skia), PNG;
+//! - [`textures`]: each material's image and how a model viewer blends it (Half-Life flags);
 //! - [`text`]: labels in the embedded DejaVu Sans Mono (ab_glyph);
 //! - [`camera`]: front and side orthographic views fitted to a cell;
 //! - [`model`]: an asset posed through the runtime and drawn into a cell, LOD error measured;
@@ -17,6 +19,7 @@ pub mod mapping;
 pub mod model;
 pub mod sheet;
 pub mod text;
+pub mod textures;
 
 pub use camera::Up;
 pub use sheet::{contact_sheet, SheetError, SheetOptions, SheetReport};

@@ -1,10 +1,12 @@
 //! Drawing an asset in one pose into one cell: the pose through the runtime (local-to-model,
-//! skinning palette, [`sinew_core::skin_lod`]), the meshes as flat-shaded z-buffered triangles, the
+//! skinning palette, [`sinew_core::skin_lod`]), the meshes as z-buffered triangles (textured where
+//! their material has an image, flat shaded otherwise), the
 //! skeleton drawn over them, and the geometric error of a LOD measured against LOD 0.
 
 use super::camera::Fit;
 use super::canvas::{Canvas, Cell, Rgb};
 use super::text;
+use super::textures::{Blend, Textures};
 use sinew_core::format::Asset;
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{local_to_model, skin_lod, skinning_palette, Lod, Skeleton, Transform};
@@ -119,7 +121,9 @@ pub fn material_color(asset: &Asset, name: &str) -> Rgb {
     ]
 }
 
-/// Draws every mesh of `posed` at LOD `level` (or its last LOD) into `cell`, flat shaded.
+/// Draws every mesh of `posed` at LOD `level` (or its last LOD) into `cell`, flat shaded; a submesh
+/// whose material has a texture (and whose LOD has texture coordinates) is drawn textured, opaque and
+/// masked textures first, additive ones after them so that they add to what is behind.
 pub fn draw_meshes(
     canvas: &mut Canvas,
     asset: &Asset,
@@ -127,44 +131,65 @@ pub fn draw_meshes(
     level: usize,
     fit: &Fit,
     cell: Cell,
+    textures: &Textures,
 ) {
     let view = fit.view();
     let light = (view.toward * 0.8 + view.up * 0.5 - view.right * 0.3).normalize();
     canvas.clear_depth();
-    for (m, positions) in asset.meshes.iter().zip(&posed.positions) {
-        let li = level.min(m.lods.len().saturating_sub(1));
-        let (Some(lod), Some(pos)) = (m.lods.get(li), positions.get(li)) else {
-            continue;
-        };
-        let screen: Vec<Vec3> = pos.iter().map(|&p| fit.project(p)).collect();
-        let draw_range = |canvas: &mut Canvas, idx: &[u32], base: Rgb| {
-            for t in idx.chunks_exact(3) {
-                let (Some(&a), Some(&b), Some(&c)) = (
-                    pos.get(t[0] as usize),
-                    pos.get(t[1] as usize),
-                    pos.get(t[2] as usize),
-                ) else {
-                    continue;
-                };
-                let n = (b - a).cross(c - a).normalize_or_zero();
-                let shade = 0.3 + 0.7 * n.dot(light).abs();
-                let col = base.map(|v| (f32::from(v) * shade).round().clamp(0.0, 255.0) as u8);
-                canvas.triangle(
-                    screen[t[0] as usize],
-                    screen[t[1] as usize],
-                    screen[t[2] as usize],
-                    col,
-                    cell,
-                );
+    for additive_pass in [false, true] {
+        for (m, positions) in asset.meshes.iter().zip(&posed.positions) {
+            let li = level.min(m.lods.len().saturating_sub(1));
+            let (Some(lod), Some(pos)) = (m.lods.get(li), positions.get(li)) else {
+                continue;
+            };
+            let screen: Vec<Vec3> = pos.iter().map(|&p| fit.project(p)).collect();
+            let has_uvs = lod.uvs.len() == lod.positions.len();
+            let draw_range = |canvas: &mut Canvas, idx: &[u32], material: &str| {
+                let tex = textures.get(material).filter(|_| has_uvs);
+                if additive_pass != tex.is_some_and(|t| t.blend == Blend::Additive) {
+                    return;
+                }
+                let base = material_color(asset, material);
+                for t in idx.chunks_exact(3) {
+                    let (Some(&a), Some(&b), Some(&c)) = (
+                        pos.get(t[0] as usize),
+                        pos.get(t[1] as usize),
+                        pos.get(t[2] as usize),
+                    ) else {
+                        continue;
+                    };
+                    let n = (b - a).cross(c - a).normalize_or_zero();
+                    let shade = 0.3 + 0.7 * n.dot(light).abs();
+                    let corners = [
+                        screen[t[0] as usize],
+                        screen[t[1] as usize],
+                        screen[t[2] as usize],
+                    ];
+                    match tex {
+                        Some(tex) => {
+                            let uv = [
+                                lod.uvs[t[0] as usize],
+                                lod.uvs[t[1] as usize],
+                                lod.uvs[t[2] as usize],
+                            ];
+                            canvas.textured_triangle(corners, uv, tex, shade, cell);
+                        }
+                        None => {
+                            let col = base
+                                .map(|v| (f32::from(v) * shade).round().clamp(0.0, 255.0) as u8);
+                            canvas.triangle(corners[0], corners[1], corners[2], col, cell);
+                        }
+                    }
+                }
+            };
+            if lod.submeshes.is_empty() {
+                draw_range(canvas, &lod.indices, "");
             }
-        };
-        if lod.submeshes.is_empty() {
-            draw_range(canvas, &lod.indices, material_color(asset, ""));
-        }
-        for s in &lod.submeshes {
-            let end = (s.first_index as usize).saturating_add(s.index_count as usize);
-            if let Some(idx) = lod.indices.get(s.first_index as usize..end) {
-                draw_range(canvas, idx, material_color(asset, &s.material));
+            for s in &lod.submeshes {
+                let end = (s.first_index as usize).saturating_add(s.index_count as usize);
+                if let Some(idx) = lod.indices.get(s.first_index as usize..end) {
+                    draw_range(canvas, idx, &s.material);
+                }
             }
         }
     }

@@ -3,10 +3,12 @@
 //! LOD 0, with its triangle count and measured error), then one row per clip with poses spread across
 //! it, then notes. Layout and sizes: [`CELL`], [`CAPTION`], [`TITLE`], [`NOTE`] (docs/cli.md).
 
-use super::camera::{Fit, Up, View};
+use super::camera::{Facing, Fit, Up, View};
 use super::canvas::{Canvas, Cell, Rgb};
 use super::model::{bind_pose, draw_meshes, draw_skeleton, measured_error, pose, Posed, INK};
 use super::text;
+use super::textures::Textures;
+use crate::body::{self, BodyChoice};
 use sinew_core::format::Asset;
 use sinew_core::{Animator, Clip, Skeleton};
 use std::sync::Arc;
@@ -31,8 +33,10 @@ const MARGIN: f32 = 12.0;
 /// What the sheet shows.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SheetOptions {
-    /// The model's up axis.
-    pub up: Up,
+    /// Up and facing of the model's clips (clip strips, LOD cells).
+    pub facing: Facing,
+    /// Up and facing of its bind pose (the rest cells).
+    pub rest_facing: Facing,
     /// Only this clip (else every clip, up to [`MAX_CLIP_ROWS`]).
     pub clip: Option<String>,
     /// Poses per clip strip, 1 to [`MAX_FRAMES`].
@@ -41,16 +45,24 @@ pub struct SheetOptions {
     pub names: bool,
     /// The title line (usually the file name).
     pub title: String,
+    /// The meshes drawn, or `None` for the model's default body ([`crate::body`]).
+    pub meshes: Option<Vec<usize>>,
+    /// Images of the materials' textures, named as the materials' `texture` strings name them (a
+    /// Half-Life model's own images, or files found beside the input).
+    pub images: Vec<sinew_scene::Image>,
 }
 
 impl Default for SheetOptions {
     fn default() -> Self {
         Self {
-            up: Up::Y,
+            facing: Up::Y.into(),
+            rest_facing: Up::Y.into(),
             clip: None,
             frames: 6,
             names: false,
             title: String::new(),
+            meshes: None,
+            images: Vec::new(),
         }
     }
 }
@@ -88,7 +100,11 @@ pub struct SheetReport {
     pub columns: u32,
     /// Rows of cells.
     pub rows: u32,
-    /// Triangles of LOD 0 over all meshes.
+    /// The meshes drawn (the model's body, or the ones asked for), by name.
+    pub meshes: Vec<String>,
+    /// Materials drawn with their texture.
+    pub textured_materials: usize,
+    /// Triangles of LOD 0 over all meshes drawn.
     pub triangles: usize,
     /// The LOD cells.
     pub lods: Vec<LodCellReport>,
@@ -162,6 +178,12 @@ pub fn contact_sheet(
     if opts.frames == 0 || opts.frames > MAX_FRAMES {
         return Err(SheetError::Frames(opts.frames));
     }
+    let chosen = match &opts.meshes {
+        Some(m) => m.clone(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    let asset = &body::only(asset, &chosen);
+    let textures = Textures::new(asset, &opts.images);
     let skeleton = asset
         .skeleton
         .clone()
@@ -243,13 +265,13 @@ pub fn contact_sheet(
     let mut cells: Vec<(Cell, View, String, usize)> = vec![
         (
             cell_at(0, 0),
-            View::front(opts.up),
+            View::front(opts.rest_facing),
             "rest pose, front".to_string(),
             0,
         ),
         (
             cell_at(1, 0),
-            View::side(opts.up),
+            View::side(opts.rest_facing),
             "rest pose, side".to_string(),
             0,
         ),
@@ -275,7 +297,7 @@ pub fn contact_sheet(
         let rel = if extent > 0.0 { err / extent } else { 0.0 };
         cells.push((
             cell_at(1 + level as u32, 0),
-            View::front(opts.up),
+            View::front(opts.rest_facing),
             format!(
                 "LOD{level}: {tris} tris, err {} ({:.2}%)",
                 short(err),
@@ -297,7 +319,7 @@ pub fn contact_sheet(
         canvas.fill_rect(*cell, CELL_BACKGROUND);
         caption(&mut canvas, *cell, label);
         let fit = Fit::new(*view, rest_points.iter().copied(), *cell, MARGIN);
-        draw_meshes(&mut canvas, asset, &rest, *level, &fit, *cell);
+        draw_meshes(&mut canvas, asset, &rest, *level, &fit, *cell, &textures);
         if let (Some(s), 0) = (&skeleton, *level) {
             draw_skeleton(&mut canvas, s, &rest, &fit, opts.names && cell.x <= 2);
         }
@@ -337,8 +359,13 @@ pub fn contact_sheet(
                     cell,
                     &format!("{} @ {}s", clip.name(), short(*t)),
                 );
-                let fit = Fit::new(View::front(opts.up), points.iter().copied(), cell, MARGIN);
-                draw_meshes(&mut canvas, asset, p, 0, &fit, cell);
+                let fit = Fit::new(
+                    View::front(opts.facing),
+                    points.iter().copied(),
+                    cell,
+                    MARGIN,
+                );
+                draw_meshes(&mut canvas, asset, p, 0, &fit, cell, &textures);
                 draw_skeleton(&mut canvas, s, p, &fit, false);
             }
             strips.push(ClipStripReport {
@@ -366,12 +393,50 @@ pub fn contact_sheet(
             height,
             columns,
             rows,
+            meshes: asset.meshes.iter().map(|m| m.name.clone()).collect(),
+            textured_materials: textures.len(),
             triangles: lod0_triangles,
             lods,
             clips: strips,
             notes,
         },
     ))
+}
+
+/// A thumbnail: the model's rest pose from the front (its bind facing), textured, without skeleton
+/// lines unless it has no meshes, `size` pixels square (16 to 1024), for batch reports. `opts` gives
+/// the facing, the meshes (default body) and the images; its clip, frames, names and title are not
+/// used.
+pub fn thumbnail(asset: &Asset, opts: &SheetOptions, size: u32) -> Result<Vec<u8>, SheetError> {
+    let size = size.clamp(16, 1024);
+    let chosen = match &opts.meshes {
+        Some(m) => m.clone(),
+        None => body::select(asset, &BodyChoice::Default).unwrap_or_default(),
+    };
+    let asset = &body::only(asset, &chosen);
+    let textures = Textures::new(asset, &opts.images);
+    let mut canvas =
+        Canvas::new(size, size, CELL_BACKGROUND).ok_or(SheetError::TooLarge(size, size))?;
+    let cell = Cell {
+        x: 0,
+        y: 0,
+        w: size,
+        h: size,
+    };
+    let rest = pose(asset, &bind_pose(asset));
+    let fit = Fit::new(
+        View::front(opts.rest_facing),
+        rest.points(0),
+        cell,
+        (size as f32 * 0.05).max(2.0),
+    );
+    draw_meshes(&mut canvas, asset, &rest, 0, &fit, cell, &textures);
+    if asset.meshes.is_empty() {
+        if let Some(s) = asset.skeleton.as_ref().filter(|s| !s.is_empty()) {
+            draw_skeleton(&mut canvas, s, &rest, &fit, false);
+        }
+    }
+    canvas.png().map_err(SheetError::Png)
 }
 
 /// A number in at most four significant figures (`0.0123`, `1.5`, `120`).
@@ -405,6 +470,14 @@ mod tests {
         let looping = plain.with_looping(true);
         assert_eq!(strip_times(&looping, 4), vec![0.0, 0.5, 1.0, 1.5]);
         assert_eq!(strip_times(&plain, 1), vec![0.0]);
+    }
+
+    #[test]
+    fn a_thumbnail_is_square_and_an_empty_asset_draws_a_plain_one() {
+        let png = thumbnail(&Asset::default(), &SheetOptions::default(), 64).expect("png");
+        let dec = png::Decoder::new(std::io::Cursor::new(png));
+        let r = dec.read_info().expect("header");
+        assert_eq!((r.info().width, r.info().height), (64, 64));
     }
 
     #[test]

@@ -7,6 +7,7 @@ use crate::format::asset::{
     Asset, SectionInfo, Tag, ALIGN, HEADER_SIZE, MAGIC, SECTION_ENTRY_SIZE, SECTION_VERSION,
     VERSION_MAJOR,
 };
+use crate::format::axes::{Axes, Axis};
 use crate::format::error::{FormatError, FormatErrorKind as K};
 use crate::format::game::GameData;
 use crate::Skeleton;
@@ -235,6 +236,10 @@ pub fn read(bytes: &[u8]) -> Result<Asset> {
         Some(mut c) => super::game::game(&mut c, &strs)?,
         None => GameData::default(),
     };
+    let axes = match cur(8) {
+        Some(mut c) => Some(axes(&mut c)?),
+        None => None,
+    };
     Ok(Asset {
         skeleton,
         materials,
@@ -244,5 +249,26 @@ pub fn read(bytes: &[u8]) -> Result<Asset> {
         source_vertex,
         masks,
         game,
+        axes,
     })
+}
+
+/// The `AXES` section: three axis codes (up, forward, bind forward), then reserved bytes (at least 16
+/// in all; more are skipped).
+fn axes(c: &mut Cur) -> Result<Axes> {
+    let b: [u8; 16] = c.array()?;
+    let axis = |i: usize, what: &str| {
+        Axis::from_code(b[i]).ok_or_else(|| {
+            c.err_at(
+                i,
+                K::Invalid(format!("{what} axis code {} is not 0 to 5", b[i])),
+            )
+        })
+    };
+    let (up, forward, bind_forward) = (
+        axis(0, "up")?,
+        axis(1, "forward")?,
+        axis(2, "bind forward")?,
+    );
+    Axes::new(up, forward, bind_forward).map_err(|m| c.err_at(0, K::Invalid(m)))
 }

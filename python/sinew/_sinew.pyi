@@ -21,7 +21,7 @@ class UsageError(SinewError):
 def run(argv: List[str]) -> Tuple[int, Optional[str], Optional[str], bool]:
     """Runs a command as ``sinew --json``: (exit code, JSON report, error line, arguments refused)."""
 
-def bake(path: str, clips: List[str] = ..., fps: Optional[float] = ..., mesh: int = ..., lod: int = ...
+def bake(path: str, clips: List[str] = ..., fps: Optional[float] = ..., mesh: Optional[int] = ..., lod: int = ...
          ) -> Tuple[bytes, int, int, float, str]:
     """In-memory bake: (little-endian f32 positions, frames, vertices, fps, clip ranges as JSON)."""
 

@@ -7,7 +7,7 @@ use sinew_core::format::{self, clip_record_size, Asset};
 use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{Clip, ClipBinding, Curve, Sampler, Skeleton, Transform};
 use sinew_pipeline::compile::compile;
-use sinew_pipeline::compress::{compress_clip, CompressOptions};
+use sinew_pipeline::compress::{compress_clip, CompressOptions, Effort};
 use sinew_scene::{Scene, SceneClip};
 
 /// Linear curve value at a time (clamped), written independently of the core.
@@ -287,6 +287,49 @@ fn peers_settings_beat_the_reference_sizes_of_ozz_and_acl() {
     if sinew_testdata::corpus().is_some() {
         assert_eq!(checked, PEERS.len());
         assert_eq!(checked_clips, PEER_CLIPS.len());
+    }
+}
+
+/// The clips nearest to ozz-animation's sizes at the peers' setting (gltf2ozz, docs/performance.md
+/// "Against ozz-animation's gltf2ozz, per clip"): (corpus file, clip, ozz-animation bytes).
+const OZZ_CLOSEST_CLIPS: [(&str, &str, usize); 3] = [
+    ("gltf/Fox.glb", "Walk", 4_341),
+    ("gltf/Fox.glb", "Run", 5_457),
+    ("ms3d/ninja.ms3d", "ninja", 24_311),
+];
+
+#[test]
+fn fast_effort_stays_smaller_than_ozz_on_the_closest_clips() {
+    // Issue 29, goal 2: `--effort fast` trades bytes for time, but never past gltf2ozz.
+    let options = CompressOptions {
+        effort: Effort::Fast,
+        ..CompressOptions::peers()
+    };
+    let mut checked = 0;
+    for (file, name, ozz) in OZZ_CLOSEST_CLIPS {
+        let Some(path) = sinew_testdata::corpus_file(file) else {
+            continue;
+        };
+        let scene = sinew_import::import_path(&path, &Default::default()).unwrap();
+        let plain = compile(&scene).unwrap();
+        let i = plain.clips.iter().position(|c| c.name() == name).unwrap();
+        let clip = &plain.clips[i];
+        let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &options);
+        assert!(c.is_compressed(), "{file} {name}: {r:?}");
+        let err = max_error(
+            plain.skeleton.as_ref(),
+            &scene.clips[i],
+            clip.times(),
+            &c,
+            0.1,
+        );
+        assert!(err <= 0.001, "{file} {name}: error {err}");
+        let size = clip_record_size(&c);
+        assert!(size < ozz, "{file} {name}: fast {size} B, ozz {ozz} B");
+        checked += 1;
+    }
+    if sinew_testdata::corpus().is_some() {
+        assert_eq!(checked, OZZ_CLOSEST_CLIPS.len());
     }
 }
 

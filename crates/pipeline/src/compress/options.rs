@@ -30,7 +30,8 @@ pub(super) const MAX_DESCENDED: usize = 8;
 
 /// How much searching the encoder does for a small clip (every effort keeps the tolerance).
 ///
-/// - `Fast`: the default's candidates, only the smallest refined.
+/// - `Fast`: the default's candidates, only the smallest refined, and its refinement without the
+///   graded first rounds ([`super::search::THRESHOLDS`]): every round at the full limit.
 /// - `Default`: the search of the module docs.
 /// - `Max`: the default's candidates (the same ones, so never a larger result) and more key budgets
 ///   ([`MAX_EXTRA_KEY_BUDGETS`]) and segment lengths ([`MAX_EXTRA_SEGMENTS`]), with up to

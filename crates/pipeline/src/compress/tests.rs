@@ -140,7 +140,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
         let (_, bits, _) =
             first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None).unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
-        descend(&mut e, true);
+        descend(&mut e, true, &THRESHOLDS);
         assert!(
             e.bits.iter().zip(&bits).any(|(a, b)| a < b),
             "nothing descended"
@@ -376,7 +376,7 @@ fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
         assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
         for par in [false, true] {
             let mut got = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
-            descend(&mut got, par);
+            descend(&mut got, par, &THRESHOLDS);
             assert_eq!(
                 got.bits, want.bits,
                 "compensate {compensate}, parallel {par}"

@@ -1,6 +1,6 @@
 //! Incremental error evaluation of a quantisation while its bit widths change.
 
-use super::metric::{exceeds, joint_limits, subtrees, Rig};
+use super::metric::{exceeds, joint_limits, Rig};
 use super::quantize::{locate, raw_rotation, Layout, Quant};
 use super::reduce::{WChan, Work};
 use sinew_core::clip::{nlerp, normalize_rotation};
@@ -89,10 +89,10 @@ pub(super) struct Eval<'a> {
     /// Per track and channel kind (T, R, S): the first component, if quantized.
     pub(super) first: Vec<[Option<usize>; 3]>,
     /// Per joint: itself, then its descendants in skeleton order.
-    pub(super) subtree: Vec<Vec<usize>>,
+    pub(super) subtree: &'a [Vec<usize>],
     /// Per joint `j`, per position `n > 0` in `subtree[j]`: the position of that joint's parent
     /// (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
-    pub(super) subtree_parent: Vec<Vec<usize>>,
+    pub(super) subtree_parent: &'a [Vec<usize>],
     /// Per joint: its local transform where the clip does not animate it.
     pub(super) base: Vec<Transform>,
     /// Per segment, per component: bit width, and the quantization parameters it gives.
@@ -163,32 +163,6 @@ impl<'a> Eval<'a> {
                 first[comp.track][comp.kind as usize] = Some(c);
             }
         }
-        let subtree = subtrees(parents);
-        // Per joint `j`, per joint `d`: `d`'s position in `subtree[j]`, or `u32::MAX`.
-        let mut subtree_at = vec![u32::MAX; nj * nj];
-        for (j, list) in subtree.iter().enumerate() {
-            for (n, &d) in list.iter().enumerate() {
-                if let Some(slot) = subtree_at.get_mut(j * nj + d) {
-                    *slot = n as u32;
-                }
-            }
-        }
-        let subtree_parent: Vec<Vec<usize>> = subtree
-            .iter()
-            .enumerate()
-            .map(|(j, list)| {
-                list.iter()
-                    .enumerate()
-                    .map(|(n, &d)| {
-                        let p = parents.get(d).copied().flatten().map(usize::from);
-                        match p.and_then(|p| subtree_at.get(j * nj + p)) {
-                            Some(&np) if n > 0 && np != u32::MAX => np as usize,
-                            _ => usize::MAX,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
         let mut base: Vec<Transform> = if ctx.like.additive() {
             vec![Transform::IDENTITY; nj]
         } else {
@@ -238,8 +212,8 @@ impl<'a> Eval<'a> {
             joint,
             track_of,
             first,
-            subtree,
-            subtree_parent,
+            subtree: &rig.subtree,
+            subtree_parent: &rig.subtree_parent,
             base,
             params: (0..bits.len())
                 .map(|i| layout.params(i / nc.max(1), i % nc.max(1), bits[i]))

@@ -21,6 +21,12 @@ pub(super) struct Rig {
     pub(super) distance: f32,
     /// Per joint: the model-space scale of its parent (1 for roots).
     pub(super) parent_scale: Vec<f32>,
+    /// Per joint: itself, then its descendants in skeleton order ([`subtrees`]); computed once
+    /// here, as every state of the search reads it.
+    pub(super) subtree: Vec<Vec<usize>>,
+    /// Per joint `j`, per position `n > 0` in `subtree[j]`: the position of that joint's parent
+    /// (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
+    pub(super) subtree_parent: Vec<Vec<usize>>,
 }
 
 pub(super) fn model_scale(a: &Affine3A) -> f32 {
@@ -96,6 +102,37 @@ pub(super) fn subtrees(parents: &[Option<u16>]) -> Vec<Vec<usize>> {
     subtree
 }
 
+/// Per joint `j`, per position `n` in `subtree[j]`: the position of that joint's parent in
+/// `subtree[j]` (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
+pub(super) fn subtree_parents(parents: &[Option<u16>], subtree: &[Vec<usize>]) -> Vec<Vec<usize>> {
+    let nj = parents.len();
+    // Per joint `j`, per joint `d`: `d`'s position in `subtree[j]`, or `u32::MAX`.
+    let mut subtree_at = vec![u32::MAX; nj * nj];
+    for (j, list) in subtree.iter().enumerate() {
+        for (n, &d) in list.iter().enumerate() {
+            if let Some(slot) = subtree_at.get_mut(j * nj + d) {
+                *slot = n as u32;
+            }
+        }
+    }
+    subtree
+        .iter()
+        .enumerate()
+        .map(|(j, list)| {
+            list.iter()
+                .enumerate()
+                .map(|(n, &d)| {
+                    let p = parents.get(d).copied().flatten().map(usize::from);
+                    match p.and_then(|p| subtree_at.get(j * nj + p)) {
+                        Some(&np) if n > 0 && np != u32::MAX => np as usize,
+                        _ => usize::MAX,
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
 impl Rig {
     pub(super) fn new(clip: &Clip, skeleton: Option<&Skeleton>, distance: f32) -> Option<Rig> {
         let (mut names, mut parents, mut bind) = match skeleton {
@@ -139,6 +176,8 @@ impl Rig {
             .iter()
             .map(|p| p.map_or(1.0, |p| scale[p as usize]))
             .collect();
+        let subtree = subtrees(skeleton.parents());
+        let subtree_parent = subtree_parents(skeleton.parents(), &subtree);
         Some(Rig {
             skeleton,
             points,
@@ -147,6 +186,8 @@ impl Rig {
             bone,
             distance,
             parent_scale,
+            subtree,
+            subtree_parent,
         })
     }
 

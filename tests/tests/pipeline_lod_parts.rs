@@ -11,11 +11,11 @@
 #![allow(clippy::unwrap_used)]
 
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
+use sinew_pipeline::compile::compile;
 use sinew_pipeline::lod::{generate_lods, LodOptions};
 use sinew_scene::Scene;
-use sinew_testdata::geometry::{diagonal, hausdorff, model_matrices, TriangleGrid};
+use sinew_testdata::geometry::{diagonal, hausdorff, posed_models, skin_positions, TriangleGrid};
 
 /// gltfpack 1.3.0's distance on this file at more triangles than either LOD, in % of the diagonal,
 /// less a little: sinew must do better.
@@ -83,42 +83,10 @@ fn measured(a: (&[Vec3], &[u32]), b: (&[Vec3], &[u32])) -> f32 {
     d
 }
 
-/// Skinning palette of the `swing` clip at time `t`.
-fn palette(scene: &Scene, t: f32) -> Vec<Mat4> {
-    let skeleton = scene.skeleton.as_ref().unwrap();
-    let c = &scene.clips[0];
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .unwrap();
-    let binding = ClipBinding::new(&clip, skeleton);
-    let mut locals = skeleton.bind_local().to_vec();
-    Sampler::new()
-        .sample(&clip, &binding, skeleton, t, &mut locals)
-        .unwrap();
-    model_matrices(skeleton, &locals)
-        .iter()
-        .zip(skeleton.inverse_bind())
-        .map(|(m, ib)| *m * *ib)
-        .collect()
-}
-
-fn skin(lod: &Lod, palette: &[Mat4]) -> Vec<Vec3> {
-    // Written out (not the runtime's skinning): sum of weight x matrix x position.
-    lod.positions
-        .iter()
-        .zip(lod.joints.iter().zip(&lod.weights))
-        .map(|(p, (j, w))| {
-            (0..4)
-                .map(|i| palette[j[i] as usize].transform_point3(*p) * w[i])
-                .sum()
-        })
-        .collect()
+/// Model matrices of the fixture's first clip at time `t` (for `skin_positions`).
+fn models(scene: &Scene, t: f32) -> Vec<Mat4> {
+    let clip = &compile(scene).unwrap().clips[0];
+    posed_models(scene.skeleton.as_ref().unwrap(), clip, t)
 }
 
 #[test]
@@ -177,15 +145,16 @@ fn lods_stay_close_when_posed_at_several_times_of_the_clip() {
     let lods = lods(&mut s);
     // 0.5 s: the arm at the top of its swing; 1.5 s: at the bottom; 1.0 s: back at rest.
     for t in [0.25, 0.5, 1.0, 1.5, 1.75] {
-        let pal = palette(&s, t);
-        let posed_base = skin(&base, &pal);
+        let pal = models(&s, t);
+        let sk = s.skeleton.as_ref().unwrap();
+        let posed_base = skin_positions(&base, sk, &pal);
         // The blade really moves: its tip is elsewhere at 0.5 s.
         if t == 0.5 {
             let tip = base.positions.iter().position(|p| *p == BLADE_TIP).unwrap();
             assert!(posed_base[tip].distance(BLADE_TIP) > 0.5);
         }
         for (k, g) in lods.iter().enumerate() {
-            let posed = skin(&g.lod, &pal);
+            let posed = skin_positions(&g.lod, sk, &pal);
             let d = measured((&posed_base, &base.indices), (&posed, &g.lod.indices));
             let pct = d / diag * 100.0;
             assert!(

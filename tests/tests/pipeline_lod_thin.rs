@@ -8,11 +8,12 @@
 #![allow(clippy::unwrap_used)]
 
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler};
+use sinew_core::Lod;
 use sinew_import::{import_path, ImportOptions};
+use sinew_pipeline::compile::compile;
 use sinew_pipeline::lod::{generate_lods, LodOptions};
 use sinew_scene::Scene;
-use sinew_testdata::geometry::{diagonal, hausdorff, model_matrices, TriangleGrid};
+use sinew_testdata::geometry::{diagonal, hausdorff, posed_models, skin_positions, TriangleGrid};
 
 /// The sword's and the antenna's tips (fixtures/generator/src/thin.rs).
 const TIPS: [Vec3; 2] = [Vec3::new(0.9, 2.4, 0.0), Vec3::new(0.12, 2.62, 0.0)];
@@ -24,41 +25,10 @@ fn scene() -> Scene {
     import_path(&path, &ImportOptions::default()).unwrap()
 }
 
-fn palette(scene: &Scene, t: f32) -> Vec<Mat4> {
-    let skeleton = scene.skeleton.as_ref().unwrap();
-    let c = &scene.clips[0];
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .unwrap();
-    let binding = ClipBinding::new(&clip, skeleton);
-    let mut locals = skeleton.bind_local().to_vec();
-    Sampler::new()
-        .sample(&clip, &binding, skeleton, t, &mut locals)
-        .unwrap();
-    model_matrices(skeleton, &locals)
-        .iter()
-        .zip(skeleton.inverse_bind())
-        .map(|(m, ib)| *m * *ib)
-        .collect()
-}
-
-/// Skinned positions, written out (not the runtime's skinning).
-fn skin(lod: &Lod, palette: &[Mat4]) -> Vec<Vec3> {
-    lod.positions
-        .iter()
-        .zip(lod.joints.iter().zip(&lod.weights))
-        .map(|(p, (j, w))| {
-            (0..4)
-                .map(|i| palette[j[i] as usize].transform_point3(*p) * w[i])
-                .sum()
-        })
-        .collect()
+/// Model matrices of the fixture's first clip at time `t` (for `skin_positions`).
+fn models(scene: &Scene, t: f32) -> Vec<Mat4> {
+    let clip = &compile(scene).unwrap().clips[0];
+    posed_models(scene.skeleton.as_ref().unwrap(), clip, t)
 }
 
 /// LOD 0's connected pieces (triangles joined through shared positions) of at most 60 triangles:
@@ -190,11 +160,12 @@ fn at_gltfpacks_counts_the_lods_are_closer_at_rest_and_posed() {
             k + 1
         );
         for (t, g) in TIMES.iter().zip(posed) {
-            let pal = palette(&s, *t);
+            let pal = models(&s, *t);
+            let sk = s.skeleton.as_ref().unwrap();
             let d = hausdorff(
-                &skin(base, &pal),
+                &skin_positions(base, sk, &pal),
                 &base.indices,
-                &skin(lod, &pal),
+                &skin_positions(lod, sk, &pal),
                 &lod.indices,
             ) / diag
                 * 100.0;
@@ -221,11 +192,12 @@ fn lods_stay_close_at_rest_and_posed() {
         );
         let mut worst = rest;
         for t in TIMES {
-            let pal = palette(&s, t);
+            let pal = models(&s, t);
+            let sk = s.skeleton.as_ref().unwrap();
             worst = worst.max(hausdorff(
-                &skin(&base, &pal),
+                &skin_positions(&base, sk, &pal),
                 &base.indices,
-                &skin(lod, &pal),
+                &skin_positions(lod, sk, &pal),
                 &lod.indices,
             ));
         }

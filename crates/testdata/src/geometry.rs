@@ -2,7 +2,7 @@
 //! skinned positions), written independently of the simplifier and the runtime they check.
 
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Lod, Skeleton};
+use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
 
 /// Distance from a point to a triangle (closest point by region tests, Ericson's method).
 pub fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
@@ -259,4 +259,16 @@ pub fn model_matrices(skeleton: &Skeleton, locals: &[sinew_core::Transform]) -> 
         m.push(x);
     }
     m
+}
+
+/// Model matrices of the skeleton posed by `clip` at time `t` (the runtime's sampler; the bind pose
+/// where the clip drives nothing), for [`skin_positions`]. Panics when the clip cannot be sampled
+/// (a test's setup error).
+pub fn posed_models(skeleton: &Skeleton, clip: &Clip, t: f32) -> Vec<Mat4> {
+    let binding = ClipBinding::new(clip, skeleton);
+    let mut locals = skeleton.bind_local().to_vec();
+    if let Err(e) = Sampler::new().sample(clip, &binding, skeleton, t, &mut locals) {
+        panic!("sampling {:?} at {t}: {e}", clip.name());
+    }
+    model_matrices(skeleton, &locals)
 }

@@ -519,6 +519,67 @@ fn a_probe_changes_no_first_width_verdict() {
 }
 
 #[test]
+fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
+    // first_state climbs by galloping and bisection; a climb one rung at a time from the same
+    // start (the same f32 budgets: `start` times 2^(1/4), multiplied one rung at a time) stops
+    // below the first failing rung. Where passing is monotone in the budget (checked here over
+    // the rungs climbed), both give the same budget and widths, from starts far below the result
+    // (a long climb) to just below it, and from above it (the way down).
+    let (source, rig) = swinging_chain();
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let step: f32 = std::f32::consts::SQRT_2.sqrt();
+    let layout = Layout::new(&work, &rig, 16, true);
+    let passes = |budget: f32| {
+        Eval::build(
+            &ctx,
+            &layout,
+            &work,
+            layout.first_bits(budget),
+            true,
+            true,
+            None,
+        )
+        .1
+        .is_ok()
+    };
+    let mut climbs = Vec::new();
+    for start in [1e-7f32, 1e-6, 1e-5, 1e-4, 5e-4, 7e-4, 0.001, 0.01] {
+        let got = first_state(&ctx, &layout, &work, start, true, false, &mut None);
+        // Rung by rung.
+        let mut budget = start;
+        let expected = if passes(budget) {
+            let mut k = 0;
+            while k < 33 && passes(budget * step) {
+                budget *= step;
+                k += 1;
+            }
+            climbs.push(k);
+            // Monotone above: every rung up to the top fails once one has.
+            let mut b = budget * step;
+            for _ in k..33 {
+                assert!(!passes(b), "start {start}: passing is not monotone here");
+                b *= step;
+            }
+            Some(budget)
+        } else {
+            (0..80).find_map(|_| {
+                budget /= step;
+                passes(budget).then_some(budget)
+            })
+        };
+        let got_budget = got.as_ref().map(|g| g.0);
+        assert_eq!(got_budget, expected, "start {start}");
+        if let (Some(g), Some(b)) = (got, expected) {
+            assert_eq!(g.1, layout.first_bits(b), "start {start}");
+        }
+    }
+    // Long climbs and short ones were compared.
+    assert!(climbs.iter().any(|&k| k >= 8), "{climbs:?}");
+    assert!(climbs.iter().any(|&k| k <= 2), "{climbs:?}");
+}
+
+#[test]
 fn record_size_is_the_size_of_the_encoded_record() {
     // The search ranks candidates by `Layout::record_size` without encoding them: it must be the
     // size `clip_record_size` gives the encoded clip, for any bit widths (shared and per-key

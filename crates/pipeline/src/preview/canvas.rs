@@ -37,6 +37,55 @@ fn paint(c: Rgb) -> Paint<'static> {
     p
 }
 
+/// Twice the signed area of a triangle in pixel coordinates (positive counter-clockwise in y-down
+/// pixels); its absolute value divides the edge weights into barycentric coordinates.
+fn signed_area([a, b, c]: [Vec3; 3]) -> f32 {
+    (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x)
+}
+
+/// Calls `f(pixel index, depth, edge weights, corners)` for every pixel of a `width` x `height`
+/// canvas inside `clip` whose centre is inside or on an edge of triangle `p` (either winding).
+/// The weights go with `corners`, the triangle's corner indices in the order the pixel loop
+/// uses (the second and third swapped for a clockwise triangle); dividing them by the triangle's
+/// absolute area gives its barycentric coordinates.
+fn covered(
+    p: [Vec3; 3],
+    clip: Cell,
+    width: u32,
+    height: u32,
+    mut f: impl FnMut(usize, f32, [f32; 3], [usize; 3]),
+) {
+    let area = signed_area(p);
+    if area == 0.0 || !area.is_finite() {
+        return;
+    }
+    let corners = if area < 0.0 { [0, 2, 1] } else { [0, 1, 2] };
+    let [a, b, c] = corners.map(|k| p[k]);
+    let area = area.abs();
+    let x0 = a.x.min(b.x).min(c.x).floor().max(clip.x as f32) as i64;
+    let y0 = a.y.min(b.y).min(c.y).floor().max(clip.y as f32) as i64;
+    let x1 = (a.x.max(b.x).max(c.x).ceil() as i64).min(i64::from(clip.x + clip.w) - 1);
+    let y1 = (a.y.max(b.y).max(c.y).ceil() as i64).min(i64::from(clip.y + clip.h) - 1);
+    let w = i64::from(width);
+    let x1 = x1.min(w - 1);
+    let y1 = y1.min(i64::from(height) - 1);
+    let edge = |p: Vec3, q: Vec3, x: f32, y: f32| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
+    for y in y0.max(0)..=y1 {
+        let py = y as f32 + 0.5;
+        for x in x0.max(0)..=x1 {
+            let px = x as f32 + 0.5;
+            let w0 = edge(b, c, px, py);
+            let w1 = edge(c, a, px, py);
+            let w2 = edge(a, b, px, py);
+            if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                continue;
+            }
+            let z = (w0 * a.z + w1 * b.z + w2 * c.z) / area;
+            f((y * w + x) as usize, z, [w0, w1, w2], corners);
+        }
+    }
+}
+
 impl Canvas {
     /// A `w` x `h` canvas filled with `background`. `None` when a side is 0 or too large.
     pub fn new(w: u32, h: u32, background: Rgb) -> Option<Canvas> {
@@ -85,40 +134,14 @@ impl Canvas {
     /// `clip` only, both windings, with the z-buffer. A pixel is covered when its centre is inside
     /// or on an edge.
     pub fn triangle(&mut self, a: Vec3, b: Vec3, c: Vec3, color: Rgb, clip: Cell) {
-        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if area == 0.0 || !area.is_finite() {
-            return;
-        }
-        let (b, c) = if area < 0.0 { (c, b) } else { (b, c) };
-        let area = area.abs();
-        let x0 = a.x.min(b.x).min(c.x).floor().max(clip.x as f32) as i64;
-        let y0 = a.y.min(b.y).min(c.y).floor().max(clip.y as f32) as i64;
-        let x1 = (a.x.max(b.x).max(c.x).ceil() as i64).min(i64::from(clip.x + clip.w) - 1);
-        let y1 = (a.y.max(b.y).max(c.y).ceil() as i64).min(i64::from(clip.y + clip.h) - 1);
-        let w = self.pixmap.width() as i64;
-        let x1 = x1.min(w - 1);
-        let y1 = y1.min(self.pixmap.height() as i64 - 1);
-        let edge =
-            |p: Vec3, q: Vec3, x: f32, y: f32| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
-        for y in y0.max(0)..=y1 {
-            let py = y as f32 + 0.5;
-            for x in x0.max(0)..=x1 {
-                let px = x as f32 + 0.5;
-                let w0 = edge(b, c, px, py);
-                let w1 = edge(c, a, px, py);
-                let w2 = edge(a, b, px, py);
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                let z = (w0 * a.z + w1 * b.z + w2 * c.z) / area;
-                let i = (y * w + x) as usize;
-                if z < self.depth[i] {
-                    self.depth[i] = z;
-                    let px = &mut self.pixmap.data_mut()[i * 4..i * 4 + 4];
-                    px.copy_from_slice(&[color[0], color[1], color[2], 255]);
-                }
+        let (w, h) = (self.pixmap.width(), self.pixmap.height());
+        covered([a, b, c], clip, w, h, |i, z, _, _| {
+            if z < self.depth[i] {
+                self.depth[i] = z;
+                let px = &mut self.pixmap.data_mut()[i * 4..i * 4 + 4];
+                px.copy_from_slice(&[color[0], color[1], color[2], 255]);
             }
-        }
+        });
     }
 
     /// Draws one textured triangle (corners as in [`Canvas::triangle`], texture coordinates `uv`),
@@ -134,65 +157,36 @@ impl Canvas {
         shade: f32,
         clip: Cell,
     ) {
-        let [a, b, c] = p;
-        let area = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-        if area == 0.0 || !area.is_finite() {
-            return;
-        }
-        let ((b, c), (ub, uc)) = if area < 0.0 {
-            ((c, b), (uv[2], uv[1]))
-        } else {
-            ((b, c), (uv[1], uv[2]))
-        };
-        let ua = uv[0];
-        let area = area.abs();
-        let x0 = a.x.min(b.x).min(c.x).floor().max(clip.x as f32) as i64;
-        let y0 = a.y.min(b.y).min(c.y).floor().max(clip.y as f32) as i64;
-        let x1 = (a.x.max(b.x).max(c.x).ceil() as i64).min(i64::from(clip.x + clip.w) - 1);
-        let y1 = (a.y.max(b.y).max(c.y).ceil() as i64).min(i64::from(clip.y + clip.h) - 1);
-        let w = self.pixmap.width() as i64;
-        let x1 = x1.min(w - 1);
-        let y1 = y1.min(self.pixmap.height() as i64 - 1);
-        let edge =
-            |p: Vec3, q: Vec3, x: f32, y: f32| (q.x - p.x) * (y - p.y) - (q.y - p.y) * (x - p.x);
         let lit = |v: u8| (f32::from(v) * shade).round().clamp(0.0, 255.0) as u8;
-        for y in y0.max(0)..=y1 {
-            let py = y as f32 + 0.5;
-            for x in x0.max(0)..=x1 {
-                let px = x as f32 + 0.5;
-                let w0 = edge(b, c, px, py);
-                let w1 = edge(c, a, px, py);
-                let w2 = edge(a, b, px, py);
-                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                    continue;
-                }
-                let z = (w0 * a.z + w1 * b.z + w2 * c.z) / area;
-                let i = (y * w + x) as usize;
-                if z >= self.depth[i] {
-                    continue;
-                }
-                let texel = if tex.chrome {
-                    [tex.mean[0], tex.mean[1], tex.mean[2], 255]
-                } else {
-                    let t = (ua * w0 + ub * w1 + uc * w2) / area;
-                    tex.sample(t.x, t.y)
-                };
-                let dst = &mut self.pixmap.data_mut()[i * 4..i * 4 + 4];
-                match tex.blend {
-                    Blend::Masked if texel[3] < 128 => continue,
-                    Blend::Additive => {
-                        for k in 0..3 {
-                            dst[k] = dst[k].saturating_add(lit(texel[k]));
-                        }
-                        continue;
-                    }
-                    _ => {
-                        dst.copy_from_slice(&[lit(texel[0]), lit(texel[1]), lit(texel[2]), 255]);
-                    }
-                }
-                self.depth[i] = z;
+        // What `covered` divides its edge weights by.
+        let area = signed_area(p).abs();
+        let (w, h) = (self.pixmap.width(), self.pixmap.height());
+        covered(p, clip, w, h, |i, z, [w0, w1, w2], corner| {
+            if z >= self.depth[i] {
+                return;
             }
-        }
+            let texel = if tex.chrome {
+                [tex.mean[0], tex.mean[1], tex.mean[2], 255]
+            } else {
+                let [ua, ub, uc] = corner.map(|k| uv[k]);
+                let t = (ua * w0 + ub * w1 + uc * w2) / area;
+                tex.sample(t.x, t.y)
+            };
+            let dst = &mut self.pixmap.data_mut()[i * 4..i * 4 + 4];
+            match tex.blend {
+                Blend::Masked if texel[3] < 128 => return,
+                Blend::Additive => {
+                    for k in 0..3 {
+                        dst[k] = dst[k].saturating_add(lit(texel[k]));
+                    }
+                    return;
+                }
+                _ => {
+                    dst.copy_from_slice(&[lit(texel[0]), lit(texel[1]), lit(texel[2]), 255]);
+                }
+            }
+            self.depth[i] = z;
+        });
     }
 
     /// An anti-aliased line `width` pixels wide (no depth).

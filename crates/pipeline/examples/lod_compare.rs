@@ -21,94 +21,16 @@
 //! `--sweep` builds sinew's LODs with one quality knob changed at a time (docs/lod.md).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler, Skeleton};
+mod lod_common;
+
+use lod_common::{level_of, same_rig, soup};
+use sinew_core::glam::Mat4;
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::Path;
 use std::time::Instant;
-
-/// A mesh's LOD at `level` (None: LOD 0); a mesh without that level (not built) gives the last
-/// level it has, which is what the runtime draws there.
-fn level_of(m: &sinew_scene::Mesh, level: Option<usize>) -> &Lod {
-    match level {
-        None => &m.geometry,
-        Some(k) => m
-            .lods
-            .get(k)
-            .or(m.lods.last())
-            .map_or(&m.geometry, |g| &g.lod),
-    }
-}
-
-/// All meshes of a LOD level (None: LOD 0) as one soup, optionally posed by `palette`.
-fn soup(scene: &Scene, level: Option<usize>, palette: Option<&[Mat4]>) -> (Vec<Vec3>, Vec<u32>) {
-    let (mut p, mut i) = (Vec::new(), Vec::new());
-    for m in &scene.meshes {
-        let lod = level_of(m, level);
-        let base = p.len() as u32;
-        match palette {
-            Some(pal) if lod.is_skinned() => {
-                let mut out = vec![Vec3::ZERO; lod.positions.len()];
-                sinew_core::skin(
-                    pal,
-                    &lod.positions,
-                    &[],
-                    &lod.joints,
-                    &lod.weights,
-                    &mut out,
-                    &mut [],
-                )
-                .expect("skinning");
-                p.extend(out);
-            }
-            _ => p.extend_from_slice(&lod.positions),
-        }
-        i.extend(lod.indices.iter().map(|&x| x + base));
-    }
-    (p, i)
-}
-
-/// The skinning palette of the scene's first clip sampled at `at` times its duration.
-fn mid_pose(scene: &Scene, at: f32) -> Option<(Vec<Mat4>, String, f32)> {
-    let skeleton: &Skeleton = scene.skeleton.as_ref()?;
-    let c = scene.clips.first()?;
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .ok()?;
-    let binding = ClipBinding::new(&clip, skeleton);
-    let mut locals = skeleton.bind_local().to_vec();
-    let t = clip.duration() * at;
-    Sampler::new()
-        .sample(&clip, &binding, skeleton, t, &mut locals)
-        .ok()?;
-    let mut models = vec![Mat4::IDENTITY; skeleton.len()];
-    sinew_core::local_to_model(skeleton.parents(), &locals, &mut models).ok()?;
-    let mut palette = vec![Mat4::IDENTITY; skeleton.len()];
-    sinew_core::skinning_palette(&models, skeleton.inverse_bind(), &mut palette).ok()?;
-    Some((palette, c.name.clone(), t))
-}
-
-/// True when `other` has the original's joints in the same order with the same inverse bind matrices
-/// (within 1e-5), so that the original's palette poses it the way it poses the original.
-fn same_rig(original: &Scene, other: &Scene) -> bool {
-    let (Some(a), Some(b)) = (&original.skeleton, &other.skeleton) else {
-        return false;
-    };
-    a.names() == b.names()
-        && a.inverse_bind()
-            .iter()
-            .zip(b.inverse_bind())
-            .all(|(x, y)| x.abs_diff_eq(*y, 1e-5))
-}
 
 fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     scene
@@ -174,7 +96,7 @@ fn main() {
     let (base_p, base_i) = soup(&scene, None, None);
     let diag = diagonal(&base_p);
     let base_tris = base_i.len() / 3;
-    let pose = mid_pose(&scene, at);
+    let pose = lod_common::pose_palette(&scene, at);
     let posed_base = pose
         .as_ref()
         .map(|(pal, _, _)| soup(&scene, None, Some(pal)));
@@ -309,9 +231,9 @@ fn main() {
     for other in others {
         let o = import_path(Path::new(other), &options).expect("import other");
         let tris = triangles(&o, None);
-        let opose = mid_pose(&o, at);
+        let opose = lod_common::pose_palette(&o, at);
         let (h, posed) = measure(&o, None, opose.as_ref().map(|(p, _, _)| p.as_slice()));
-        let posed_same = match (&pose, same_rig(&scene, &o)) {
+        let posed_same = match (&pose, same_rig(&scene, &o, 1e-5)) {
             (Some((pal, _, _)), true) => measure(&o, None, Some(pal)).1,
             _ => None,
         };

@@ -22,91 +22,16 @@
 //! the same time.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod lod_common;
+
+use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{generate_lods, LodOptions};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-/// All meshes of a level (None: LOD 0) as one soup, optionally posed; a mesh without that level
-/// contributes its last one.
-fn soup(scene: &Scene, level: Option<usize>, palette: Option<&[Mat4]>) -> (Vec<Vec3>, Vec<u32>) {
-    let (mut p, mut i) = (Vec::new(), Vec::new());
-    for m in &scene.meshes {
-        let lod: &Lod = match level {
-            None => &m.geometry,
-            Some(k) => match m.lods.get(k).or(m.lods.last()) {
-                Some(g) => &g.lod,
-                None => &m.geometry,
-            },
-        };
-        let base = p.len() as u32;
-        match palette {
-            Some(pal)
-                if lod.is_skinned()
-                    && lod
-                        .joints
-                        .iter()
-                        .flatten()
-                        .all(|&j| (j as usize) < pal.len()) =>
-            {
-                let mut out = vec![Vec3::ZERO; lod.positions.len()];
-                sinew_core::skin(
-                    pal,
-                    &lod.positions,
-                    &[],
-                    &lod.joints,
-                    &lod.weights,
-                    &mut out,
-                    &mut [],
-                )
-                .expect("skinning");
-                p.extend(out);
-            }
-            _ => p.extend_from_slice(&lod.positions),
-        }
-        i.extend(lod.indices.iter().map(|&x| x + base));
-    }
-    (p, i)
-}
-
-fn palette(scene: &Scene, at: f32) -> Option<Vec<Mat4>> {
-    let skeleton = scene.skeleton.as_ref()?;
-    let c = scene.clips.first()?;
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .ok()?;
-    let binding = ClipBinding::new(&clip, skeleton);
-    let mut locals = skeleton.bind_local().to_vec();
-    Sampler::new()
-        .sample(&clip, &binding, skeleton, clip.duration() * at, &mut locals)
-        .ok()?;
-    let mut models = vec![Mat4::IDENTITY; skeleton.len()];
-    sinew_core::local_to_model(skeleton.parents(), &locals, &mut models).ok()?;
-    let mut pal = vec![Mat4::IDENTITY; skeleton.len()];
-    sinew_core::skinning_palette(&models, skeleton.inverse_bind(), &mut pal).ok()?;
-    Some(pal)
-}
-
-fn same_rig(a: &Scene, b: &Scene) -> bool {
-    let (Some(a), Some(b)) = (&a.skeleton, &b.skeleton) else {
-        return false;
-    };
-    a.names() == b.names()
-        && a.inverse_bind()
-            .iter()
-            .zip(b.inverse_bind())
-            .all(|(x, y)| x.abs_diff_eq(*y, 1e-4))
-}
 
 fn triangles(scene: &Scene, level: Option<usize>) -> usize {
     soup(scene, level, None).1.len() / 3
@@ -137,7 +62,7 @@ impl Reference {
                 let pal: &[Mat4] = if own_rig {
                     pal
                 } else {
-                    own = palette(other, *at).unwrap_or_default();
+                    own = pose_palette(other, *at).map(|p| p.0).unwrap_or_default();
                     &own
                 };
                 let (p, i) = soup(other, level, Some(pal));
@@ -250,7 +175,7 @@ fn main() {
             let poses = ats
                 .iter()
                 .filter_map(|&at| {
-                    let pal = palette(&scene, at)?;
+                    let pal = pose_palette(&scene, at)?.0;
                     let posed = soup(&one, None, Some(&pal));
                     Some((at, pal, posed))
                 })
@@ -299,7 +224,7 @@ fn main() {
                 };
                 generate_lods(&mut m, &options).expect("matched LODs");
                 for (k, o) in g.iter().enumerate() {
-                    let rig = same_rig(&r.scene, o);
+                    let rig = same_rig(&r.scene, o, 1e-4);
                     let (g_rest, g_posed) = r.measure(o, None, rig);
                     let (s_rest, s_posed) = r.measure(&m, Some(k), true);
                     let s_tris = m.meshes[0]

@@ -66,15 +66,7 @@ fn tube() -> (Scene, usize) {
     .unwrap();
     let mut scene = Scene::new(SourceFormat::Sinew);
     scene.skeleton = Some(skeleton);
-    let n = lod.positions.len() as u32;
-    scene.meshes.push(Mesh {
-        name: "tube".into(),
-        geometry: lod,
-        source_vertex: (0..n).collect(),
-        source_vertex_count: n,
-        lods: Vec::new(),
-        lods_not_built: Vec::new(),
-    });
+    scene.meshes.push(Mesh::unsplit("tube", lod));
     (scene, tris)
 }
 

@@ -216,6 +216,22 @@ pub struct Mesh {
     pub lods_not_built: Vec<NotBuiltLod>,
 }
 
+impl Mesh {
+    /// A mesh whose vertices are the source's own, one for one and in order (`source_vertex` the
+    /// identity), with no LODs yet.
+    pub fn unsplit(name: impl Into<String>, geometry: Lod) -> Mesh {
+        let n = geometry.positions.len() as u32;
+        Mesh {
+            name: name.into(),
+            geometry,
+            source_vertex: (0..n).collect(),
+            source_vertex_count: n,
+            lods: Vec::new(),
+            lods_not_built: Vec::new(),
+        }
+    }
+}
+
 /// An animation clip as importers produce it: linear curves per joint name, absolute local transforms.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SceneClip {

@@ -421,15 +421,7 @@ pub(super) fn import_meshes(
             name = format!("{name}#{}", node.unwrap_or(mi));
             used_names.insert(name.clone());
         }
-        let count = lod.positions.len() as u32;
-        scene.meshes.push(Mesh {
-            name,
-            geometry: lod,
-            source_vertex: (0..count).collect(),
-            source_vertex_count: count,
-            lods: Vec::new(),
-            lods_not_built: Vec::new(),
-        });
+        scene.meshes.push(Mesh::unsplit(name, lod));
     }
     if generated_normals > 0 {
         scene.diagnostics.push(

@@ -7,34 +7,12 @@
 //   node threejs-check.mjs EXPORT.glb BAKE.pc2 CLIP
 import fs from 'node:fs';
 import * as THREE from 'three';
-import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { loadGlb } from './threejs-load.mjs';
 
 const [glbPath, pc2Path, clipName, fpsArg] = process.argv.slice(2);
 const fps = Number(fpsArg);
-// Node has no image decoder: the textures are taken out of the JSON chunk before loading (poses and
-// skinning do not depend on them).
-const glb = withoutTextures(fs.readFileSync(glbPath));
-const ab = glb.buffer.slice(glb.byteOffset, glb.byteOffset + glb.byteLength);
-
-function withoutTextures(bytes) {
-  const jsonLen = bytes.readUInt32LE(12);
-  const json = JSON.parse(bytes.subarray(20, 20 + jsonLen).toString('utf8'));
-  delete json.images;
-  delete json.textures;
-  delete json.samplers;
-  for (const m of json.materials || []) delete m.pbrMetallicRoughness?.baseColorTexture;
-  let text = Buffer.from(JSON.stringify(json), 'utf8');
-  text = Buffer.concat([text, Buffer.alloc((4 - (text.length % 4)) % 4, 0x20)]);
-  const rest = bytes.subarray(20 + jsonLen);
-  const head = Buffer.alloc(20);
-  head.write('glTF', 0, 'ascii');
-  head.writeUInt32LE(2, 4);
-  head.writeUInt32LE(20 + text.length + rest.length, 8);
-  head.writeUInt32LE(text.length, 12);
-  head.write('JSON', 16, 'ascii');
-  return Buffer.concat([head, text, rest]);
-}
-const gltf = await new Promise((ok, fail) => new GLTFLoader().parse(ab, '', ok, fail));
+// Textures are left out (threejs-load.mjs): poses and skinning do not depend on them.
+const gltf = await loadGlb(glbPath);
 
 // PC2: "POINTCACHE2\0", version, points, start frame (f32), sample step (f32), samples.
 const pc2 = fs.readFileSync(pc2Path);

@@ -75,6 +75,15 @@ fn tree(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
     out
 }
 
+/// The report of a run whose incremental records were ignored, for a reason naming `why`.
+fn assert_ignored(v: &Value, why: &str) {
+    assert_eq!(v["incremental"]["state"], "ignored");
+    assert!(
+        v["incremental"]["reason"].as_str().unwrap().contains(why),
+        "{v}"
+    );
+}
+
 #[test]
 fn an_input_with_nothing_to_convert_is_exit_2_naming_it() {
     let dir = tempfile::tempdir().unwrap();
@@ -572,14 +581,7 @@ fn a_corrupt_or_foreign_record_means_a_full_run_never_a_wrong_reuse() {
     std::fs::write(&record, &text[..text.len() / 2]).unwrap();
     let (code, v, err) = inc();
     assert_eq!(code, 0, "{err}");
-    assert_eq!(v["incremental"]["state"], "ignored");
-    assert!(
-        v["incremental"]["reason"]
-            .as_str()
-            .unwrap()
-            .contains("cross.sinew.json: corrupt"),
-        "{v}"
-    );
+    assert_ignored(&v, "cross.sinew.json: corrupt");
     assert!(statuses(&v).values().all(|s| s == "converted"));
     assert_eq!(tree(&out), written);
 
@@ -596,28 +598,14 @@ fn a_corrupt_or_foreign_record_means_a_full_run_never_a_wrong_reuse() {
     r["reads"][0]["blake3"] = blake3_hex_via_sinew(&ms3d, dir.path()).into();
     std::fs::write(&record, serde_json::to_string_pretty(&r).unwrap()).unwrap();
     let (_, v, _) = inc();
-    assert_eq!(v["incremental"]["state"], "ignored");
-    assert!(
-        v["incremental"]["reason"]
-            .as_str()
-            .unwrap()
-            .contains("checksum"),
-        "{v}"
-    );
+    assert_ignored(&v, "checksum");
     std::fs::write(&ms3d, &original).unwrap();
 
     // Another tool's JSON in its place: foreign, ignored.
     std::fs::write(&record, r#"{"format":"someone-else","files":[]}"#).unwrap();
     let (code, v, err) = inc();
     assert_eq!(code, 0, "{err}");
-    assert_eq!(v["incremental"]["state"], "ignored");
-    assert!(
-        v["incremental"]["reason"]
-            .as_str()
-            .unwrap()
-            .contains("not a sinew record"),
-        "{v}"
-    );
+    assert_ignored(&v, "not a sinew record");
     assert!(statuses(&v).values().all(|s| s == "converted"));
     assert_eq!(tree(&out), written);
     // And the records written by that full run are good again.

@@ -1,6 +1,6 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
-use super::metric::{fk, point_error, subtrees, Rig};
+use super::metric::{fk, point_error, Rig};
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
 use sinew_core::{Channel, Clip, ClipBinding, Sampler, Track, Transform};
@@ -316,16 +316,16 @@ pub(super) fn simplify_channels(
 /// The work's local poses and model transforms at every source time (time-major, one per rig
 /// joint), as the runtime sampler and [`super::metric`]'s forward kinematics give them, kept up to
 /// date as [`simplify_channels`] replaces tracks.
-struct SubtreeState {
+struct SubtreeState<'a> {
     local: Vec<Vec<Transform>>,
     model: Vec<Vec<Affine3A>>,
-    /// Per joint: itself, then its descendants in skeleton order.
-    subtree: Vec<Vec<usize>>,
+    /// Per joint: itself, then its descendants in skeleton order (the rig's).
+    subtree: &'a [Vec<usize>],
     defaults: Vec<Transform>,
 }
 
-impl SubtreeState {
-    fn new(rig: &Rig, plain: &Clip, times: &[f32]) -> SubtreeState {
+impl<'a> SubtreeState<'a> {
+    fn new(rig: &'a Rig, plain: &Clip, times: &[f32]) -> SubtreeState<'a> {
         let local = rig.poses(plain, times);
         let mut m = Vec::new();
         let model = local
@@ -335,9 +335,7 @@ impl SubtreeState {
                 m.clone()
             })
             .collect();
-        let parents = rig.skeleton.parents();
         let nj = rig.skeleton.len();
-        let subtree = subtrees(parents);
         let defaults = if plain.additive() {
             vec![Transform::IDENTITY; nj]
         } else {
@@ -346,7 +344,7 @@ impl SubtreeState {
         SubtreeState {
             local,
             model,
-            subtree,
+            subtree: &rig.subtree,
             defaults,
         }
     }

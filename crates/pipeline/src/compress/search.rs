@@ -62,18 +62,27 @@ pub(super) fn first_eval<'a>(
     par: bool,
     probe: &mut Option<usize>,
 ) -> Option<(f32, Eval<'a>)> {
-    type Passed<'b> = Result<Eval<'b>, usize>;
-    let passes = |budget: f32, probe: Option<usize>| -> Passed<'a> {
-        let bits = layout.first_bits(budget);
+    type Measured<'b> = Result<Eval<'b>, (Vec<u8>, usize)>;
+    let measure = |bits: Vec<u8>, probe: Option<usize>| -> Measured<'a> {
         let (e, verdict) = Eval::build(ctx, layout, work, bits, compensate, true, probe);
-        verdict.map(|()| e)
-    };
-    // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
-    let noted = |r: Passed<'a>, probe: &mut Option<usize>| {
-        if let Err(i) = r {
-            *probe = Some(i);
+        match verdict {
+            Ok(()) => Ok(e),
+            Err(i) => Err((e.bits, i)),
         }
-        r.ok()
+    };
+    // A check's verdict depends on the widths alone, and neighbouring rungs often have the same
+    // widths (a clip with little motion: every component at 0 bits over many rungs): a rung whose
+    // widths equal those of the state in hand passes, one whose widths failed before fails, and
+    // only distinct widths are measured. The same verdicts, so the same result.
+    let mut failed: Vec<Vec<u8>> = Vec::new();
+    // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
+    let settle = |r: Measured<'a>, failed: &mut Vec<Vec<u8>>, probe: &mut Option<usize>| match r {
+        Ok(e) => Some(e),
+        Err((bits, i)) => {
+            *probe = Some(i);
+            failed.push(bits);
+            None
+        }
     };
     // The start and the rung above are measured together (in parallel): the usual outcome, the
     // start passing and the rung above failing, then takes one round, and a rung measured in vain
@@ -82,19 +91,24 @@ pub(super) fn first_eval<'a>(
     // in total at 0.001 @ 0.1, Fox Walk -4%; encoder time -9% to +4% per file).
     let step: f32 = std::f32::consts::SQRT_2.sqrt();
     let mut budget = start;
-    let both = |a: f32, b: f32, p: Option<usize>| {
-        if par {
-            rayon::join(|| passes(a, p), || passes(b, p))
-        } else {
-            (passes(a, p), passes(b, p))
-        }
+    let (bits0, bits1) = (layout.first_bits(budget), layout.first_bits(budget * step));
+    let p = *probe;
+    let (r0, r1) = if bits0 == bits1 {
+        (measure(bits0, p), None)
+    } else if par {
+        let (a, b) = rayon::join(|| measure(bits0, p), || measure(bits1, p));
+        (a, Some(b))
+    } else {
+        (measure(bits0, p), Some(measure(bits1, p)))
     };
-    let (r0, r1) = both(budget, budget * step, *probe);
-    let mut found = noted(r0, probe);
-    let up = noted(r1, probe);
-    if found.is_some() {
-        let Some(first_up) = up else {
-            return found.map(|e| (budget, e));
+    let mut found = settle(r0, &mut failed, probe);
+    // The rung above: `None` when its widths are the start's (the same verdict and state).
+    let up = r1.map(|r| settle(r, &mut failed, probe));
+    if let Some(start_state) = found.take() {
+        let mut lo_state = match up {
+            None => start_state,
+            Some(Some(e)) => e,
+            Some(None) => return Some((budget, start_state)),
         };
         // Up: rung k is `start` times `step` k times (multiplied one at a time, as a rung-by-rung
         // climb computes it), at most `TOP`. Galloping (rungs 2, 4, 8, ...) then bisecting finds
@@ -102,24 +116,44 @@ pub(super) fn first_eval<'a>(
         // little motion climb far (a 2-key clip reaches the top).
         const TOP: u32 = 33;
         let rung = |k: u32| (0..k).fold(start, |b, _| b * step);
-        let (mut lo, mut lo_state) = (1u32, first_up);
+        // Whether rung `k` passes; a newly measured passing state replaces `lo_state`.
+        let passes = |k: u32,
+                      lo_state: &mut Eval<'a>,
+                      failed: &mut Vec<Vec<u8>>,
+                      probe: &mut Option<usize>| {
+            let bits = layout.first_bits(rung(k));
+            if bits == lo_state.bits {
+                return true;
+            }
+            if failed.contains(&bits) {
+                return false;
+            }
+            match settle(measure(bits, *probe), failed, probe) {
+                Some(e) => {
+                    *lo_state = e;
+                    true
+                }
+                None => false,
+            }
+        };
+        let mut lo = 1u32;
         let mut hi = None;
         let mut k = 2u32;
         while hi.is_none() && lo < TOP {
-            match noted(passes(rung(k), *probe), probe) {
-                Some(f) => {
-                    (lo, lo_state) = (k, f);
-                    k = (k * 2).min(TOP);
-                }
-                None => hi = Some(k),
+            if passes(k, &mut lo_state, &mut failed, probe) {
+                lo = k;
+                k = (k * 2).min(TOP);
+            } else {
+                hi = Some(k);
             }
         }
         if let Some(mut hi) = hi {
             while hi - lo > 1 {
                 let mid = (lo + hi) / 2;
-                match noted(passes(rung(mid), *probe), probe) {
-                    Some(f) => (lo, lo_state) = (mid, f),
-                    None => hi = mid,
+                if passes(mid, &mut lo_state, &mut failed, probe) {
+                    lo = mid;
+                } else {
+                    hi = mid;
                 }
             }
         }
@@ -130,7 +164,11 @@ pub(super) fn first_eval<'a>(
         // whole measurement wasted.
         for _ in 0..80 {
             budget /= step;
-            found = noted(passes(budget, *probe), probe);
+            let bits = layout.first_bits(budget);
+            if failed.contains(&bits) {
+                continue;
+            }
+            found = settle(measure(bits, *probe), &mut failed, probe);
             if found.is_some() {
                 break;
             }

@@ -524,7 +524,8 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
     // start (the same f32 budgets: `start` times 2^(1/4), multiplied one rung at a time) stops
     // below the first failing rung. Where passing is monotone in the budget (checked here over
     // the rungs climbed), both give the same budget and widths, from starts far below the result
-    // (a long climb) to just below it, and from above it (the way down).
+    // (a long climb) to just below it, and from above it (the way down, from far above: many
+    // rungs of the same widths, which the ladder measures once).
     let (source, rig) = swinging_chain();
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
@@ -544,7 +545,10 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
         .is_ok()
     };
     let mut climbs = Vec::new();
-    for start in [1e-7f32, 1e-6, 1e-5, 1e-4, 5e-4, 7e-4, 0.001, 0.01] {
+    let mut repeated = 0;
+    for start in [
+        1e-7f32, 1e-6, 1e-5, 1e-4, 5e-4, 7e-4, 0.001, 0.01, 1.0, 100.0,
+    ] {
         let got = first_state(&ctx, &layout, &work, start, true, false, &mut None);
         // Rung by rung.
         let mut budget = start;
@@ -564,7 +568,9 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
             Some(budget)
         } else {
             (0..80).find_map(|_| {
+                let above = layout.first_bits(budget);
                 budget /= step;
+                repeated += usize::from(layout.first_bits(budget) == above);
                 passes(budget).then_some(budget)
             })
         };
@@ -577,6 +583,8 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
     // Long climbs and short ones were compared.
     assert!(climbs.iter().any(|&k| k >= 8), "{climbs:?}");
     assert!(climbs.iter().any(|&k| k <= 2), "{climbs:?}");
+    // Ways down crossed rungs of repeated widths (the ones the ladder does not measure again).
+    assert!(repeated >= 10, "{repeated}");
 }
 
 #[test]

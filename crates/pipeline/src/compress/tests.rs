@@ -520,7 +520,7 @@ fn a_probe_changes_no_first_width_verdict() {
 
 #[test]
 fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
-    // first_state climbs by galloping and bisection; a climb one rung at a time from the same
+    // first_state climbs (and descends) by galloping and bisection; a climb one rung at a time from the same
     // start (the same f32 budgets: `start` times 2^(1/4), multiplied one rung at a time) stops
     // below the first failing rung. Where passing is monotone in the budget (checked here over
     // the rungs climbed), both give the same budget and widths, from starts far below the result
@@ -567,12 +567,22 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
             }
             Some(budget)
         } else {
-            (0..80).find_map(|_| {
+            let found = (0..80).find_map(|_| {
                 let above = layout.first_bits(budget);
                 budget /= step;
                 repeated += usize::from(layout.first_bits(budget) == above);
                 passes(budget).then_some(budget)
-            })
+            });
+            // Monotone below: the rungs under the first passing one pass too (the ladder
+            // gallops down and bisects).
+            if let Some(b) = found {
+                let mut below = b;
+                for _ in 0..12 {
+                    below /= step;
+                    assert!(passes(below), "start {start}: passing is not monotone here");
+                }
+            }
+            found
         };
         let got_budget = got.as_ref().map(|g| g.0);
         assert_eq!(got_budget, expected, "start {start}");

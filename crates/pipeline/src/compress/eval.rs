@@ -7,6 +7,7 @@ use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::compressed::three_without;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
 use sinew_core::{Clip, Transform};
+use std::sync::Arc;
 
 /// What every quantization of one clip is measured against.
 pub(super) struct Ctx<'a> {
@@ -14,8 +15,9 @@ pub(super) struct Ctx<'a> {
     pub(super) like: &'a Clip,
     /// Source key times.
     pub(super) times: &'a [f32],
-    /// Per source time, per joint: the source's error points.
-    pub(super) src: Vec<Vec<[Vec3; 3]>>,
+    /// Per source time, per joint: the source's error points (shared with the search that made
+    /// them: computed once per clip).
+    pub(super) src: Arc<Vec<Vec<[Vec3; 3]>>>,
     /// `src` flattened (time-major, `nj` joints per time): what [`Eval`] reads in its loops.
     pub(super) src_flat: Vec<[Vec3; 3]>,
     /// Per source time, per joint (time-major): the source's model-space rotation (the product of
@@ -28,10 +30,38 @@ pub(super) struct Ctx<'a> {
     pub(super) uniform: bool,
 }
 
+/// A clip sampled at its times: poses and error points, computed once per clip and shared by the
+/// searches on it and the final measurement.
+pub(super) struct Sampled {
+    /// Per time: the local pose.
+    pub(super) poses: Vec<Vec<Transform>>,
+    /// Per time, per joint: the error points.
+    pub(super) points: Arc<Vec<Vec<[Vec3; 3]>>>,
+}
+
+impl Sampled {
+    pub(super) fn new(rig: &Rig, clip: &Clip, times: &[f32]) -> Sampled {
+        let poses = rig.poses(clip, times);
+        let points = Arc::new(rig.all_points(&poses));
+        Sampled { poses, points }
+    }
+}
+
 impl<'a> Ctx<'a> {
     pub(super) fn new(rig: &'a Rig, like: &'a Clip, times: &'a [f32], tolerance: f32) -> Ctx<'a> {
-        let poses = rig.poses(like, times);
-        let src = rig.all_points(&poses);
+        Ctx::of_sampled(rig, like, times, tolerance, &Sampled::new(rig, like, times))
+    }
+
+    /// [`Ctx::new`] from `like` already sampled at `times`.
+    pub(super) fn of_sampled(
+        rig: &'a Rig,
+        like: &'a Clip,
+        times: &'a [f32],
+        tolerance: f32,
+        sampled: &Sampled,
+    ) -> Ctx<'a> {
+        let poses = &sampled.poses;
+        let src = Arc::clone(&sampled.points);
         let parents = rig.skeleton.parents();
         let src_rot = poses
             .iter()

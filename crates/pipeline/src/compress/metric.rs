@@ -286,9 +286,23 @@ pub fn measure(
         return Vec::new();
     };
     let times = source.times();
-    let a = rig.all_points(&rig.poses(source, times));
+    errors_against(
+        &rig,
+        &rig.all_points(&rig.poses(source, times)),
+        candidate,
+        times,
+    )
+}
+
+/// [`measure`] with the source's error points at `times` already computed (`src`).
+pub(super) fn errors_against(
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    candidate: &Clip,
+    times: &[f32],
+) -> Vec<f32> {
     let b = rig.all_points(&rig.poses(candidate, times));
-    a.iter()
+    src.iter()
         .zip(&b)
         .flat_map(|(x, y)| point_error(x, y).collect::<Vec<_>>())
         .collect()

@@ -1,7 +1,9 @@
 //! The per-clip search over key budgets, segment lengths and bit widths, and the entry point.
 
-use super::eval::{Ctx, Eval};
-use super::metric::{clip_extent, joint_limits, measure, skeleton_extent, within, Rig};
+use super::eval::{Ctx, Eval, Sampled};
+use super::metric::{
+    clip_extent, errors_against, joint_limits, measure, skeleton_extent, within, Rig,
+};
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
     DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
@@ -316,9 +318,11 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
 /// clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result is kept (the first
 /// of equals). `Max` adds [`exhaustive_candidates`]. `compensate`: quantize rotations with chain
 /// compensation (only when every scale of the source poses is positive and uniform).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn compress_work(
     work: &mut Work,
     source: &Clip,
+    sampled: Option<&Sampled>,
     rig: &Rig,
     tolerance: f32,
     bind_allowed: bool,
@@ -329,7 +333,10 @@ pub(super) fn compress_work(
         return None;
     }
     let times = source.times();
-    let ctx = Ctx::new(rig, source, times, tolerance);
+    let ctx = match sampled {
+        Some(s) => Ctx::of_sampled(rig, source, times, tolerance, s),
+        None => Ctx::new(rig, source, times, tolerance),
+    };
     let compensate = compensate && ctx.uniform;
     let src = &ctx.src;
     simplify_channels(
@@ -580,19 +587,22 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 }
 
 /// The search on a source of thinned times first, then (when it found nothing that holds at every
-/// source time, or for `Max`) on the whole source; the smallest result.
+/// source time, or for `Max`) on the whole source; the smallest result. `whole`: the source
+/// sampled at its times.
 fn search(
     source: &Clip,
+    whole: &Sampled,
     rig: &Rig,
     tolerance: f32,
     bind_allowed: bool,
     options: &CompressOptions,
 ) -> Option<Clip> {
-    let on = |clip: &Clip, tolerance: f32, options: &CompressOptions| {
+    let on = |clip: &Clip, sampled: Option<&Sampled>, tolerance: f32, options: &CompressOptions| {
         [true, false].into_iter().find_map(|compensate| {
             compress_work(
                 &mut Work::from_plain(clip),
                 clip,
+                sampled,
                 rig,
                 tolerance,
                 bind_allowed,
@@ -603,23 +613,24 @@ fn search(
     };
     let mut found: Vec<Clip> = Vec::new();
     let times = source.times();
-    let src = rig.all_points(&rig.poses(source, times));
-    if let Some(thin) = thinned(source, rig, &src, tolerance) {
-        let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
-        let holds = |c: &Clip| within(&src, rig, c, times, &limits);
+    let src = &*whole.points;
+    if let Some(thin) = thinned(source, rig, src, tolerance) {
+        let limits = joint_limits(src, rig.skeleton.len(), tolerance);
+        let holds = |c: &Clip| within(src, rig, c, times, &limits);
         let reduced = tolerance * (1.0 - THINNING);
-        found.extend(on(&thin, reduced, options).filter(holds));
+        let thin_sampled = Sampled::new(rig, &thin, thin.times());
+        found.extend(on(&thin, Some(&thin_sampled), reduced, options).filter(holds));
         if options.effort == Effort::Max {
             // The default's result on the thinned source too, so that `Max` is never larger.
             let default = CompressOptions {
                 effort: Effort::Default,
                 ..options.clone()
             };
-            found.extend(on(&thin, reduced, &default).filter(holds));
+            found.extend(on(&thin, Some(&thin_sampled), reduced, &default).filter(holds));
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
-        found.extend(on(source, tolerance, options));
+        found.extend(on(source, Some(whole), tolerance, options));
     }
     // The smallest (the first of equals, in the order tried).
     let mut best: Option<(usize, Clip)> = None;
@@ -685,8 +696,12 @@ pub fn compress_clip(
         .filter(|t| t.is_finite() && *t >= 0.0)
         .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
     let mut best: Option<Clip> = None;
-    if let Some(rig) = Rig::new(&source, skeleton, distance) {
-        best = search(&source, &rig, tolerance, skeleton.is_some(), options);
+    let rig = Rig::new(&source, skeleton, distance);
+    let whole = rig
+        .as_ref()
+        .map(|rig| (rig, Sampled::new(rig, &source, source.times())));
+    if let Some((rig, whole)) = &whole {
+        best = search(&source, whole, rig, tolerance, skeleton.is_some(), options);
     }
     let plain_bytes = clip_record_size(&source);
     let mut out = best.unwrap_or_else(|| source.clone());
@@ -694,7 +709,12 @@ pub fn compress_clip(
         out = source.clone();
     }
     let compressed_bytes = clip_record_size(&out);
-    let mut errors = measure(&source, &out, skeleton, distance);
+    // The source's points are the ones the search measured against ([`measure`] computes them
+    // the same way).
+    let mut errors = match &whole {
+        Some((rig, whole)) => errors_against(rig, &whole.points, &out, source.times()),
+        None => measure(&source, &out, skeleton, distance),
+    };
     let max_error = errors.iter().copied().fold(0.0, f32::max);
     let p99_error = percentile(&mut errors, 0.99);
     let animated_joints = source

@@ -76,7 +76,7 @@ fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool
         effort: Effort::Default,
     };
     compress_work(
-        &mut work, &source, &rig, tolerance, true, &options, compensate,
+        &mut work, &source, None, &rig, tolerance, true, &options, compensate,
     )
     .unwrap()
 }

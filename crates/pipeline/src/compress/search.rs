@@ -32,8 +32,8 @@ fn map_in_order<T: Send, R: Send>(
 
 /// Step 3, first part, for one layout: a uniform budget, on a ladder of factors 2^(1/4) from
 /// `start`, whose a-priori bit widths ([`Layout::first_bits`]) measure within the limits while the
-/// rung above does not (going up: found by galloping and bisection, so the largest such rung when
-/// passing is monotone in the budget, as it nearly always is; going down: the first that passes);
+/// rung above does not (found by galloping and bisection both ways, so the largest such rung when
+/// passing is monotone in the budget, as it nearly always is; the same widths are measured once);
 /// returns the budget, the widths and the stored integers they give (per component, per key).
 ///
 /// `probe`: the source time where the last failing check stopped (of this ladder or an earlier

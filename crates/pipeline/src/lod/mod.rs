@@ -37,7 +37,7 @@ mod measure;
 mod step;
 mod weld;
 
-use crate::surface::{used_vertices, TriangleGrid};
+use crate::surface::{sample_points, used_vertices, TriangleGrid};
 use measure::{distinct, far_vertices, measure, measure_below, repair_locks};
 use rayon::prelude::*;
 use sinew_core::{Lod, Skeleton, MAX_INFLUENCES};
@@ -269,7 +269,7 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
-    build_lods_timed(mesh, skeleton, options, tuning, &mut Vec::new())
+    build_lods_timed(mesh, &mesh.geometry, skeleton, options, tuning, &mut Vec::new())
 }
 
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
@@ -277,6 +277,7 @@ pub fn build_lods_tuned(
 /// `seconds`.
 fn build_lods_timed(
     mesh: &Mesh,
+    input: &Lod,
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
@@ -336,6 +337,39 @@ fn build_lods_timed(
         &mesh.geometry.positions,
         &mesh.geometry.indices,
     ));
+    // The plain build (`Step::plain`) of every level starts from LOD 0 in the order it came in,
+    // welded as each step's source is.
+    let plain_flat = is_flat_soup(input);
+    // meshoptimizer squares the limit: the largest finite value stays finite.
+    let plain_budget = options.max_error.unwrap_or(f32::MAX.sqrt());
+    let plain_source = if tuning.plain_candidate {
+        let flat = plain_flat;
+        let welded = match split_shared(input) {
+            Some(split) => weld(&split, flat),
+            None => weld(input, flat),
+        };
+        validate_lod(&welded).map_err(|problem| LodError::BadMesh {
+            mesh: mesh.name.clone(),
+            problem: format!("after welding: {problem}"),
+        })?;
+        Some(welded)
+    } else {
+        None
+    };
+    let plain = plain_source.as_ref().map(|source| {
+        Step::plain(source, step::test_poses(source, skeleton), tuning)
+    });
+    // LOD 0's vertices, centroids and edge midpoints, at rest and under the test poses (skinned
+    // meshes), with its grids: what a step's builds are compared by.
+    let dense = |p: &[sinew_core::glam::Vec3]| distinct(&sample_points(p, &mesh.geometry.indices));
+    let base_dense = dense(&mesh.geometry.positions);
+    let posed_base = step::test_poses(&mesh.geometry, skeleton);
+    let posed_points: Vec<Vec<sinew_core::glam::Vec3>> =
+        posed_base.iter().map(|p| dense(p)).collect();
+    let posed_grids: Vec<TriangleGrid> = posed_base
+        .iter()
+        .map(|p| TriangleGrid::new(p, &mesh.geometry.indices))
+        .collect();
     // The target is met when within one triangle per material range of it.
     let slack = mesh.geometry.submeshes.len().max(1);
     let mut chain = LodChain::default();
@@ -375,7 +409,7 @@ fn build_lods_timed(
         })?;
         let step = Step::new(&welded, skeleton, tuning);
         // One build of the step and its repair build; the closer with no more triangles.
-        let build = |keep: &Anchors| {
+        let build_current = |keep: &Anchors| {
             let built = step.run(target, budget, keep);
             let m = measure(&welded.positions, &built.indices, &base_points, &base_grid);
             // Repair: the attribute terms (normals, UVs, test poses) weigh in meshoptimizer's
@@ -404,10 +438,59 @@ fn build_lods_timed(
             }
             (built, m)
         };
+        // The larger of a build's distances to LOD 0 at rest and under the test poses, model
+        // units, LOD 0's vertices, centroids and edge midpoints against the build's surface and
+        // the build's against LOD 0's; `None` as soon as it is known to be at least `limit`.
+        // `from`: the step the build's indices refer to.
+        let score = |from: &Step, indices: &[u32], limit: f32| -> Option<f32> {
+            let mut worst = 0.0f32;
+            let rest = std::iter::once((&from.source().positions, (&base_dense, &base_grid)));
+            let posed = from.poses.iter().zip(posed_points.iter().zip(&posed_grids));
+            for (positions, (points, grid)) in rest.chain(posed) {
+                let m = measure_below(positions, indices, points, grid, limit)?;
+                worst = worst.max(m.distance());
+            }
+            (worst < limit).then_some(worst)
+        };
+        // The current build against the plain one (gltfpack's way, `Step::plain`, from LOD 0):
+        // the plain build is kept when it has no more triangles and is closer at rest and under
+        // the test poses (the larger distance); ties keep the current build. Also says whether
+        // the plain build was kept.
+        let build = |keep: &Anchors| {
+            let (built, m) = build_current(keep);
+            let Some(plain) = &plain else {
+                return (built, m, false);
+            };
+            let other = plain.run(target, plain_budget, keep);
+            if other.indices.len() > built.indices.len().max(3 * (target + slack)) {
+                return (built, m, false);
+            }
+            let Some(current) = score(&step, &built.indices, f32::INFINITY) else {
+                return (built, m, false);
+            };
+            if std::env::var_os("SINEW_LOD_DEBUG").is_some() {
+                let s2 = score(plain, &other.indices, f32::INFINITY);
+                eprintln!(
+                    "step {} target {target}: current {} tris rest {:.5} score {:.5}; plain {} tris score {:?} (scale {scale})",
+                    k + 1,
+                    built.indices.len() / 3,
+                    m.distance(),
+                    current,
+                    other.indices.len() / 3,
+                    s2
+                );
+            }
+            if score(plain, &other.indices, current).is_some() {
+                let source = plain.source();
+                let m2 = measure(&source.positions, &other.indices, &base_points, &base_grid);
+                return (other, m2, true);
+            }
+            (built, m, false)
+        };
         // A level is written when it removed at least half of the triangles it asks of the level
         // before it; otherwise it would be (nearly) a copy.
         let enough = |tris: usize| tris < previous_tris && 2 * tris <= previous_tris + target;
-        let (mut built, mut m) = build(&keep);
+        let (mut built, mut m, mut from_plain) = build(&keep);
         let mut uv_seams_opened = false;
         if !enough(built.indices.len() / 3) {
             // UV seams hold the rest: let collapses cross them (skin seams and material borders
@@ -416,9 +499,9 @@ fn build_lods_timed(
                 open_uv_seams: true,
                 ..keep.clone()
             };
-            let (b2, m2) = build(&open);
+            let (b2, m2, p2) = build(&open);
             if b2.indices.len() < built.indices.len() {
-                (built, m, uv_seams_opened) = (b2, m2, true);
+                (built, m, uv_seams_opened, from_plain) = (b2, m2, !p2, p2);
             }
         }
         let reached = built.indices.len() / 3;
@@ -439,11 +522,15 @@ fn build_lods_timed(
             continue;
         }
         let step_error = built.error;
-        let mut lod = step.finish(built);
+        let (mut lod, flat) = match (&plain, from_plain) {
+            (Some(plain), true) => (plain.finish(built), plain_flat),
+            _ => (step.finish(built), flat),
+        };
         if flat {
             lod = flat_soup(&lod);
         }
-        accumulated = if tuning.chain {
+        // A plain build starts from LOD 0: its error is the whole chain's.
+        accumulated = if tuning.chain && !from_plain {
             accumulated + step_error
         } else {
             step_error
@@ -551,12 +638,15 @@ pub fn generate_mesh_lods_timed(
     options.validate()?;
     let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
         let started = std::time::Instant::now();
+        // The geometry as it came, before the vertex-cache order: the plain build starts from it.
+        let input = tuning.plain_candidate.then(|| mesh.geometry.clone());
         optimize_base(mesh)?;
         let mut times = MeshLodTimes {
             optimize: started.elapsed().as_secs_f64(),
             levels: Vec::new(),
         };
-        let chain = build_lods_timed(mesh, skeleton, options, tuning, &mut times.levels)?;
+        let input = input.as_ref().unwrap_or(&mesh.geometry);
+        let chain = build_lods_timed(mesh, input, skeleton, options, tuning, &mut times.levels)?;
         mesh.lods = chain.lods;
         mesh.lods_not_built = chain.not_built;
         let report = MeshLodReport {

@@ -38,8 +38,11 @@ mod step;
 mod weld;
 
 use crate::surface::{sample_points, used_vertices, TriangleGrid};
-use measure::{distinct, far_vertices, measure, measure_below, repair_locks};
+use measure::{
+    distinct, far_vertices, measure, measure_below, repair_locks, with_points, Measured,
+};
 use rayon::prelude::*;
+use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 pub use step::LodTuning;
@@ -359,17 +362,29 @@ fn build_lods_timed(
     let plain = plain_source.as_ref().map(|source| {
         Step::plain(source, step::test_poses(source, skeleton), tuning)
     });
-    // LOD 0's vertices, centroids and edge midpoints, at rest and under the test poses (skinned
-    // meshes), with its grids: what a step's builds are compared by.
-    let dense = |p: &[sinew_core::glam::Vec3]| distinct(&sample_points(p, &mesh.geometry.indices));
-    let base_dense = dense(&mesh.geometry.positions);
-    let posed_base = step::test_poses(&mesh.geometry, skeleton);
-    let posed_points: Vec<Vec<sinew_core::glam::Vec3>> =
-        posed_base.iter().map(|p| dense(p)).collect();
+    // What a step's builds are compared by: LOD 0 under the test poses (skinned meshes), with its
+    // grids and distinct vertices, and LOD 0's vertices, centroids and edge midpoints at rest.
+    let posed_base = if tuning.plain_candidate {
+        step::test_poses(&mesh.geometry, skeleton)
+    } else {
+        Vec::new()
+    };
     let posed_grids: Vec<TriangleGrid> = posed_base
         .iter()
         .map(|p| TriangleGrid::new(p, &mesh.geometry.indices))
         .collect();
+    let posed_points: Vec<Vec<Vec3>> = posed_base
+        .iter()
+        .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
+        .collect();
+    let base_dense = if tuning.plain_candidate {
+        distinct(&sample_points(
+            &mesh.geometry.positions,
+            &mesh.geometry.indices,
+        ))
+    } else {
+        Vec::new()
+    };
     // The target is met when within one triangle per material range of it.
     let slack = mesh.geometry.submeshes.len().max(1);
     let mut chain = LodChain::default();
@@ -438,24 +453,22 @@ fn build_lods_timed(
             }
             (built, m)
         };
-        // The larger of a build's distances to LOD 0 at rest and under the test poses, model
-        // units, LOD 0's vertices, centroids and edge midpoints against the build's surface and
-        // the build's against LOD 0's; `None` as soon as it is known to be at least `limit`.
-        // `from`: the step the build's indices refer to.
-        let score = |from: &Step, indices: &[u32], limit: f32| -> Option<f32> {
-            let mut worst = 0.0f32;
-            let rest = std::iter::once((&from.source().positions, (&base_dense, &base_grid)));
-            let posed = from.poses.iter().zip(posed_points.iter().zip(&posed_grids));
-            for (positions, (points, grid)) in rest.chain(posed) {
-                let m = measure_below(positions, indices, points, grid, limit)?;
-                worst = worst.max(m.distance());
+        // The larger of a build's distances to LOD 0 at rest (`m`, with LOD 0's centroids and
+        // edge midpoints measured too) and under the test poses (LOD 0's vertices), model units;
+        // `None` as soon as it is known to be at least `limit`. `from`: the step the build's
+        // indices refer to.
+        let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
+            let mut worst = with_points(m, &base_dense, limit)?;
+            for ((positions, points), grid) in from.poses.iter().zip(&posed_points).zip(&posed_grids)
+            {
+                let posed = measure_below(positions, indices, points, grid, limit)?;
+                worst = worst.max(posed.distance());
             }
             (worst < limit).then_some(worst)
         };
         // The current build against the plain one (gltfpack's way, `Step::plain`, from LOD 0):
-        // the plain build is kept when it has no more triangles and is closer at rest and under
-        // the test poses (the larger distance); ties keep the current build. Also says whether
-        // the plain build was kept.
+        // the plain build is kept when it has no more triangles and is closer by `score`; ties
+        // keep the current build. Also says whether the plain build was kept.
         let build = |keep: &Anchors| {
             let (built, m) = build_current(keep);
             let Some(plain) = &plain else {
@@ -465,27 +478,22 @@ fn build_lods_timed(
             if other.indices.len() > built.indices.len().max(3 * (target + slack)) {
                 return (built, m, false);
             }
-            let Some(current) = score(&step, &built.indices, f32::INFINITY) else {
+            let Some(current) = score(&step, &built.indices, &m, f32::INFINITY) else {
                 return (built, m, false);
             };
-            if std::env::var_os("SINEW_LOD_DEBUG").is_some() {
-                let s2 = score(plain, &other.indices, f32::INFINITY);
-                eprintln!(
-                    "step {} target {target}: current {} tris rest {:.5} score {:.5}; plain {} tris score {:?} (scale {scale})",
-                    k + 1,
-                    built.indices.len() / 3,
-                    m.distance(),
-                    current,
-                    other.indices.len() / 3,
-                    s2
-                );
+            let source = plain.source();
+            let closer = measure_below(
+                &source.positions,
+                &other.indices,
+                &base_points,
+                &base_grid,
+                current,
+            )
+            .filter(|m2| score(plain, &other.indices, m2, current).is_some());
+            match closer {
+                Some(m2) => (other, m2, true),
+                None => (built, m, false),
             }
-            if score(plain, &other.indices, current).is_some() {
-                let source = plain.source();
-                let m2 = measure(&source.positions, &other.indices, &base_points, &base_grid);
-                return (other, m2, true);
-            }
-            (built, m, false)
         };
         // A level is written when it removed at least half of the triangles it asks of the level
         // before it; otherwise it would be (nearly) a copy.

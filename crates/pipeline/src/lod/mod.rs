@@ -39,7 +39,7 @@ mod weld;
 
 use crate::surface::{sample_points, used_vertices, TriangleGrid};
 use measure::{
-    distinct, far_vertices, measure, measure_below, repair_locks, with_points, Measured,
+    distinct, far_vertices, lost_below, measure, measure_below, repair_locks, with_points, Measured,
 };
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
@@ -272,7 +272,14 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
-    build_lods_timed(mesh, &mesh.geometry, skeleton, options, tuning, &mut Vec::new())
+    build_lods_timed(
+        mesh,
+        &mesh.geometry,
+        skeleton,
+        options,
+        tuning,
+        &mut Vec::new(),
+    )
 }
 
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
@@ -359,20 +366,16 @@ fn build_lods_timed(
     } else {
         None
     };
-    let plain = plain_source.as_ref().map(|source| {
-        Step::plain(source, step::test_poses(source, skeleton), tuning)
-    });
-    // What a step's builds are compared by: LOD 0 under the test poses (skinned meshes), with its
-    // grids and distinct vertices, and LOD 0's vertices, centroids and edge midpoints at rest.
+    let plain = plain_source
+        .as_ref()
+        .map(|source| Step::plain(source, step::test_poses(source, skeleton), tuning));
+    // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
+    // (skinned meshes), and its vertices, centroids and edge midpoints at rest.
     let posed_base = if tuning.plain_candidate {
         step::test_poses(&mesh.geometry, skeleton)
     } else {
         Vec::new()
     };
-    let posed_grids: Vec<TriangleGrid> = posed_base
-        .iter()
-        .map(|p| TriangleGrid::new(p, &mesh.geometry.indices))
-        .collect();
     let posed_points: Vec<Vec<Vec3>> = posed_base
         .iter()
         .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
@@ -454,15 +457,14 @@ fn build_lods_timed(
             (built, m)
         };
         // The larger of a build's distances to LOD 0 at rest (`m`, with LOD 0's centroids and
-        // edge midpoints measured too) and under the test poses (LOD 0's vertices), model units;
+        // edge midpoints measured too) and of LOD 0's vertices from the build under the test
+        // poses, model units;
         // `None` as soon as it is known to be at least `limit`. `from`: the step the build's
         // indices refer to.
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = with_points(m, &base_dense, limit)?;
-            for ((positions, points), grid) in from.poses.iter().zip(&posed_points).zip(&posed_grids)
-            {
-                let posed = measure_below(positions, indices, points, grid, limit)?;
-                worst = worst.max(posed.distance());
+            for (positions, points) in from.poses.iter().zip(&posed_points) {
+                worst = worst.max(lost_below(positions, indices, points, limit)?);
             }
             (worst < limit).then_some(worst)
         };

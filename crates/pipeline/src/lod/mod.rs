@@ -366,9 +366,16 @@ fn build_lods_timed(
     } else {
         None
     };
-    let plain = plain_source
-        .as_ref()
-        .map(|source| Step::plain(source, step::test_poses(source, skeleton), tuning));
+    let plains: Vec<Step> = match &plain_source {
+        Some(source) => {
+            let poses = step::test_poses(source, skeleton);
+            vec![
+                Step::plain(source, poses.clone(), tuning, true),
+                Step::plain(source, poses, tuning, false),
+            ]
+        }
+        None => Vec::new(),
+    };
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
     // (skinned meshes), and its vertices, centroids and edge midpoints at rest.
     let posed_base = if tuning.plain_candidate {
@@ -468,34 +475,40 @@ fn build_lods_timed(
             }
             (worst < limit).then_some(worst)
         };
-        // The current build against the plain one (gltfpack's way, `Step::plain`, from LOD 0):
-        // the plain build is kept when it has no more triangles and is closer by `score`; ties
-        // keep the current build. Also says whether the plain build was kept.
+        // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
+        // then on positions alone): a plain build is kept when it has no more triangles and is
+        // closer by `score` than every build before it; ties keep the earlier build. Also says
+        // which plain build was kept, if any.
         let build = |keep: &Anchors| {
             let (built, m) = build_current(keep);
-            let Some(plain) = &plain else {
-                return (built, m, false);
-            };
-            let other = plain.run(target, plain_budget, keep);
-            if other.indices.len() > built.indices.len().max(3 * (target + slack)) {
-                return (built, m, false);
+            let most = built.indices.len().max(3 * (target + slack));
+            let mut best = (built, m, None);
+            if plains.is_empty() {
+                return best;
             }
-            let Some(current) = score(&step, &built.indices, &m, f32::INFINITY) else {
-                return (built, m, false);
+            let Some(mut limit) = score(&step, &best.0.indices, &best.1, f32::INFINITY) else {
+                return best;
             };
-            let source = plain.source();
-            let closer = measure_below(
-                &source.positions,
-                &other.indices,
-                &base_points,
-                &base_grid,
-                current,
-            )
-            .filter(|m2| score(plain, &other.indices, m2, current).is_some());
-            match closer {
-                Some(m2) => (other, m2, true),
-                None => (built, m, false),
+            for (i, plain) in plains.iter().enumerate() {
+                let other = plain.run(target, plain_budget, keep);
+                if other.indices.len() > most {
+                    continue;
+                }
+                let source = plain.source();
+                let Some(m2) = measure_below(
+                    &source.positions,
+                    &other.indices,
+                    &base_points,
+                    &base_grid,
+                    limit,
+                ) else {
+                    continue;
+                };
+                if let Some(s2) = score(plain, &other.indices, &m2, limit) {
+                    (best, limit) = ((other, m2, Some(i)), s2);
+                }
             }
+            best
         };
         // A level is written when it removed at least half of the triangles it asks of the level
         // before it; otherwise it would be (nearly) a copy.
@@ -511,7 +524,7 @@ fn build_lods_timed(
             };
             let (b2, m2, p2) = build(&open);
             if b2.indices.len() < built.indices.len() {
-                (built, m, uv_seams_opened, from_plain) = (b2, m2, !p2, p2);
+                (built, m, uv_seams_opened, from_plain) = (b2, m2, p2.is_none(), p2);
             }
         }
         let reached = built.indices.len() / 3;
@@ -532,15 +545,15 @@ fn build_lods_timed(
             continue;
         }
         let step_error = built.error;
-        let (mut lod, flat) = match (&plain, from_plain) {
-            (Some(plain), true) => (plain.finish(built), plain_flat),
-            _ => (step.finish(built), flat),
+        let (mut lod, flat) = match from_plain {
+            Some(i) => (plains[i].finish(built), plain_flat),
+            None => (step.finish(built), flat),
         };
         if flat {
             lod = flat_soup(&lod);
         }
         // A plain build starts from LOD 0: its error is the whole chain's.
-        accumulated = if tuning.chain && !from_plain {
+        accumulated = if tuning.chain && from_plain.is_none() {
             accumulated + step_error
         } else {
             step_error

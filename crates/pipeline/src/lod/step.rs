@@ -84,6 +84,8 @@ const POSE_WEIGHT: f32 = 4.0;
 const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
 /// gltfpack's normal weight (`simplifyAttributes` in its mesh.cpp).
 const PLAIN_NORMAL_WEIGHT: f32 = 0.5;
+/// gltfpack's default error limit (`-se`), relative to the mesh's extent.
+const PLAIN_ERROR: f32 = 0.01;
 
 /// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
 fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
@@ -316,7 +318,7 @@ pub(super) struct Step<'a> {
     whole: bool,
     /// The source's vertices under the test poses ([`test_poses`]).
     pub(super) poses: Vec<Vec<glam::Vec3>>,
-    /// The plain build (see [`Step::plain`]): normals alone weigh, no vertex flags.
+    /// A plain build (see [`Step::plain`]): normals alone weigh or nothing does, no vertex flags.
     plain: bool,
     /// Attributes per vertex in `attrs` (the first of `weights`).
     count: usize,
@@ -357,21 +359,34 @@ impl<'a> Step<'a> {
         }
     }
 
-    /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one: normals
-    /// weigh (0.5), UVs and the test poses do not (a UV or skin seam still holds), no vertex is
-    /// protected, locked or given priority, with meshoptimizer's `Prune` and, for a skinned
-    /// source, its full `Regularize`. `poses`: the source's vertices under the test poses.
-    pub(super) fn plain(source: &'a Lod, poses: Vec<Vec<glam::Vec3>>, tuning: &LodTuning) -> Self {
+    /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one (`normals`):
+    /// normals weigh (0.5), UVs and the test poses do not (a UV or skin seam still holds), no
+    /// vertex is protected, locked or given priority, with meshoptimizer's `Prune` and, for a
+    /// skinned source, its full `Regularize`, first within gltfpack's error limit (1%) and then
+    /// on to the target. Without `normals`, on positions alone: no attribute, `Prune` only, in
+    /// one call. `poses`: the source's vertices under the test poses.
+    pub(super) fn plain(
+        source: &'a Lod,
+        poses: Vec<Vec<glam::Vec3>>,
+        tuning: &LodTuning,
+        normals: bool,
+    ) -> Self {
         let mut weights = [0.0f32; ATTRIBUTE_COUNT];
-        weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
         let mut flags = SimplifyOptions::Prune;
-        if source.is_skinned() {
-            flags |= SimplifyOptions::Regularize;
-        }
+        let (attrs, count) = if normals {
+            weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
+            if source.is_skinned() {
+                flags |= SimplifyOptions::Regularize;
+            }
+            let attrs = source.normals.iter().flat_map(|n| n.to_array()).collect();
+            (attrs, 3)
+        } else {
+            (Vec::new(), 0)
+        };
         Step {
             source,
             positions: source.positions.iter().map(|p| p.to_array()).collect(),
-            attrs: source.normals.iter().flat_map(|n| n.to_array()).collect(),
+            attrs,
             weights,
             flags,
             of: submesh_of(source),
@@ -379,7 +394,7 @@ impl<'a> Step<'a> {
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
             poses,
             plain: true,
-            count: 3,
+            count,
         }
     }
 
@@ -428,7 +443,39 @@ impl<'a> Step<'a> {
         target: usize,
         max_error: f32,
     ) -> (Vec<u32>, f32) {
+        if self.plain && self.count > 0 && max_error > PLAIN_ERROR {
+            // gltfpack's error limit first (it changes which collapses each pass makes, not only
+            // where simplification stops), then on to the target from there.
+            let (first, err) = self.simplify_once(part, locks, target, PLAIN_ERROR);
+            if first.len() <= target * 3 {
+                return (first, err);
+            }
+            let (out, more) = self.simplify_once(&first, locks, target, max_error);
+            return (out, err + more);
+        }
+        self.simplify_once(part, locks, target, max_error)
+    }
+
+    fn simplify_once(
+        &self,
+        part: &[u32],
+        locks: &[SimplifyVertex],
+        target: usize,
+        max_error: f32,
+    ) -> (Vec<u32>, f32) {
         let mut err = 0.0f32;
+        if self.count == 0 {
+            let out = meshopt::simplify_with_locks_decoder(
+                part,
+                &self.positions,
+                locks,
+                target * 3,
+                max_error,
+                self.flags,
+                Some(&mut err),
+            );
+            return (out, err);
+        }
         let out = meshopt::simplify_with_attributes_and_locks_decoder(
             part,
             &self.positions,

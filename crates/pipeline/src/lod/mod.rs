@@ -388,10 +388,12 @@ fn build_lods_timed(
         .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
         .collect();
     let base_dense = if tuning.plain_candidate {
-        distinct(&sample_points(
-            &mesh.geometry.positions,
-            &mesh.geometry.indices,
-        ))
+        // Centroids and edge midpoints (`sample_points` puts them first): the vertices are in
+        // `base_points`.
+        let g = &mesh.geometry;
+        let mut points = sample_points(&g.positions, &g.indices);
+        points.truncate(g.indices.len() / 3 * 4);
+        distinct(&points)
     } else {
         Vec::new()
     };
@@ -469,10 +471,11 @@ fn build_lods_timed(
         // `None` as soon as it is known to be at least `limit`. `from`: the step the build's
         // indices refer to.
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
-            let mut worst = with_points(m, &base_dense, limit)?;
+            let mut worst = 0.0f32;
             for (positions, points) in from.poses.iter().zip(&posed_points) {
                 worst = worst.max(lost_below(positions, indices, points, limit)?);
             }
+            worst = worst.max(with_points(m, &base_dense, limit)?);
             (worst < limit).then_some(worst)
         };
         // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,

@@ -25,7 +25,11 @@
 //! - meshoptimizer's `RegularizeLight` option, which its author recommends for deforming meshes;
 //! - `Priority` on the extreme vertices of every connected part, whatever its size (`lod_parts`);
 //! - a repair build: LOD 0's farthest vertices from the step's result are locked, each with one
-//!   triangle around it, the step is built again and the closer build is kept (`measure`).
+//!   triangle around it, the step is built again and the closer build is kept (`measure`);
+//! - two plain builds of the same target from LOD 0 as it came in (gltfpack's way, then on
+//!   positions alone: `Step::plain`), each kept instead when it has no more triangles and is
+//!   closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and under the test
+//!   poses (ties keep the step's own build).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is

@@ -74,6 +74,29 @@ pub(super) fn measure_below(
     Some(Measured { lost, added, grid })
 }
 
+/// The distance of LOD 0's farthest point of `base_points` from the triangles `indices` (into
+/// `positions`); `None` as soon as it is known to be at least `limit`.
+pub(super) fn lost_below(
+    positions: &[Vec3],
+    indices: &[u32],
+    base_points: &[Vec3],
+    limit: f32,
+) -> Option<f32> {
+    let grid = TriangleGrid::new(positions, indices);
+    farthest(base_points, &grid, 0.0, limit)
+}
+
+/// The distance of `m`'s build to LOD 0 with `extra` points of LOD 0 (its centroids and edge
+/// midpoints) measured against the build's surface too; `None` as soon as it is known to be at
+/// least `limit`.
+pub(super) fn with_points(m: &Measured, extra: &[Vec3], limit: f32) -> Option<f32> {
+    let d = m.distance();
+    if d >= limit {
+        return None;
+    }
+    farthest(extra, &m.grid, d, limit)
+}
+
 /// LOD 0's points at least half as far from the measured result as the farthest (`m.lost`, which
 /// must be exact: larger than `m.added`), farthest first (ties in `base_points`' order), at most
 /// [`REPAIR_VERTICES`].

@@ -25,7 +25,11 @@
 //! - meshoptimizer's `RegularizeLight` option, which its author recommends for deforming meshes;
 //! - `Priority` on the extreme vertices of every connected part, whatever its size (`lod_parts`);
 //! - a repair build: LOD 0's farthest vertices from the step's result are locked, each with one
-//!   triangle around it, the step is built again and the closer build is kept (`measure`).
+//!   triangle around it, the step is built again and the closer build is kept (`measure`);
+//! - two plain builds of the same target from LOD 0 as it came in (gltfpack's way, then on
+//!   positions alone: `Step::plain`), each kept instead when it has no more triangles and is
+//!   closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and under the test
+//!   poses (ties keep the step's own build).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -37,9 +41,12 @@ mod measure;
 mod step;
 mod weld;
 
-use crate::surface::{used_vertices, TriangleGrid};
-use measure::{distinct, far_vertices, measure, measure_below, repair_locks};
+use crate::surface::{sample_points, used_vertices, TriangleGrid};
+use measure::{
+    distinct, far_vertices, lost_below, measure, measure_below, repair_locks, with_points, Measured,
+};
 use rayon::prelude::*;
+use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 pub use step::LodTuning;
@@ -269,7 +276,14 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
-    build_lods_timed(mesh, skeleton, options, tuning, &mut Vec::new())
+    build_lods_timed(
+        mesh,
+        &mesh.geometry,
+        skeleton,
+        options,
+        tuning,
+        &mut Vec::new(),
+    )
 }
 
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
@@ -277,6 +291,7 @@ pub fn build_lods_tuned(
 /// `seconds`.
 fn build_lods_timed(
     mesh: &Mesh,
+    input: &Lod,
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
@@ -336,6 +351,56 @@ fn build_lods_timed(
         &mesh.geometry.positions,
         &mesh.geometry.indices,
     ));
+    // The plain build (`Step::plain`) of every level starts from LOD 0 in the order it came in,
+    // welded as each step's source is.
+    let plain_flat = is_flat_soup(input);
+    // meshoptimizer squares the limit: the largest finite value stays finite.
+    let plain_budget = options.max_error.unwrap_or(f32::MAX.sqrt());
+    let plain_source = if tuning.plain_candidate {
+        let flat = plain_flat;
+        let welded = match split_shared(input) {
+            Some(split) => weld(&split, flat),
+            None => weld(input, flat),
+        };
+        validate_lod(&welded).map_err(|problem| LodError::BadMesh {
+            mesh: mesh.name.clone(),
+            problem: format!("after welding: {problem}"),
+        })?;
+        Some(welded)
+    } else {
+        None
+    };
+    let plains: Vec<Step> = match &plain_source {
+        Some(source) => {
+            let poses = step::test_poses(source, skeleton);
+            vec![
+                Step::plain(source, poses.clone(), tuning, true),
+                Step::plain(source, poses, tuning, false),
+            ]
+        }
+        None => Vec::new(),
+    };
+    // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
+    // (skinned meshes), and its vertices, centroids and edge midpoints at rest.
+    let posed_base = if tuning.plain_candidate {
+        step::test_poses(&mesh.geometry, skeleton)
+    } else {
+        Vec::new()
+    };
+    let posed_points: Vec<Vec<Vec3>> = posed_base
+        .iter()
+        .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
+        .collect();
+    let base_dense = if tuning.plain_candidate {
+        // Centroids and edge midpoints (`sample_points` puts them first): the vertices are in
+        // `base_points`.
+        let g = &mesh.geometry;
+        let mut points = sample_points(&g.positions, &g.indices);
+        points.truncate(g.indices.len() / 3 * 4);
+        distinct(&points)
+    } else {
+        Vec::new()
+    };
     // The target is met when within one triangle per material range of it.
     let slack = mesh.geometry.submeshes.len().max(1);
     let mut chain = LodChain::default();
@@ -375,7 +440,7 @@ fn build_lods_timed(
         })?;
         let step = Step::new(&welded, skeleton, tuning);
         // One build of the step and its repair build; the closer with no more triangles.
-        let build = |keep: &Anchors| {
+        let build_current = |keep: &Anchors| {
             let built = step.run(target, budget, keep);
             let m = measure(&welded.positions, &built.indices, &base_points, &base_grid);
             // Repair: the attribute terms (normals, UVs, test poses) weigh in meshoptimizer's
@@ -404,10 +469,58 @@ fn build_lods_timed(
             }
             (built, m)
         };
+        // The larger of a build's distances to LOD 0 at rest (`m`, with LOD 0's centroids and
+        // edge midpoints measured too) and of LOD 0's vertices from the build under the test
+        // poses, model units;
+        // `None` as soon as it is known to be at least `limit`. `from`: the step the build's
+        // indices refer to.
+        let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
+            let mut worst = 0.0f32;
+            for (positions, points) in from.poses.iter().zip(&posed_points) {
+                worst = worst.max(lost_below(positions, indices, points, limit)?);
+            }
+            worst = worst.max(with_points(m, &base_dense, limit)?);
+            (worst < limit).then_some(worst)
+        };
+        // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
+        // then on positions alone): a plain build is kept when it has no more triangles and is
+        // closer by `score` than every build before it; ties keep the earlier build. Also says
+        // which plain build was kept, if any.
+        let build = |keep: &Anchors| {
+            let (built, m) = build_current(keep);
+            let most = built.indices.len().max(3 * (target + slack));
+            let mut best = (built, m, None);
+            if plains.is_empty() {
+                return best;
+            }
+            let Some(mut limit) = score(&step, &best.0.indices, &best.1, f32::INFINITY) else {
+                return best;
+            };
+            for (i, plain) in plains.iter().enumerate() {
+                let other = plain.run(target, plain_budget, keep);
+                if other.indices.len() > most {
+                    continue;
+                }
+                let source = plain.source();
+                let Some(m2) = measure_below(
+                    &source.positions,
+                    &other.indices,
+                    &base_points,
+                    &base_grid,
+                    limit,
+                ) else {
+                    continue;
+                };
+                if let Some(s2) = score(plain, &other.indices, &m2, limit) {
+                    (best, limit) = ((other, m2, Some(i)), s2);
+                }
+            }
+            best
+        };
         // A level is written when it removed at least half of the triangles it asks of the level
         // before it; otherwise it would be (nearly) a copy.
         let enough = |tris: usize| tris < previous_tris && 2 * tris <= previous_tris + target;
-        let (mut built, mut m) = build(&keep);
+        let (mut built, mut m, mut from_plain) = build(&keep);
         let mut uv_seams_opened = false;
         if !enough(built.indices.len() / 3) {
             // UV seams hold the rest: let collapses cross them (skin seams and material borders
@@ -416,9 +529,9 @@ fn build_lods_timed(
                 open_uv_seams: true,
                 ..keep.clone()
             };
-            let (b2, m2) = build(&open);
+            let (b2, m2, p2) = build(&open);
             if b2.indices.len() < built.indices.len() {
-                (built, m, uv_seams_opened) = (b2, m2, true);
+                (built, m, uv_seams_opened, from_plain) = (b2, m2, p2.is_none(), p2);
             }
         }
         let reached = built.indices.len() / 3;
@@ -439,11 +552,15 @@ fn build_lods_timed(
             continue;
         }
         let step_error = built.error;
-        let mut lod = step.finish(built);
+        let (mut lod, flat) = match from_plain {
+            Some(i) => (plains[i].finish(built), plain_flat),
+            None => (step.finish(built), flat),
+        };
         if flat {
             lod = flat_soup(&lod);
         }
-        accumulated = if tuning.chain {
+        // A plain build starts from LOD 0: its error is the whole chain's.
+        accumulated = if tuning.chain && from_plain.is_none() {
             accumulated + step_error
         } else {
             step_error
@@ -551,12 +668,15 @@ pub fn generate_mesh_lods_timed(
     options.validate()?;
     let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
         let started = std::time::Instant::now();
+        // The geometry as it came, before the vertex-cache order: the plain build starts from it.
+        let input = tuning.plain_candidate.then(|| mesh.geometry.clone());
         optimize_base(mesh)?;
         let mut times = MeshLodTimes {
             optimize: started.elapsed().as_secs_f64(),
             levels: Vec::new(),
         };
-        let chain = build_lods_timed(mesh, skeleton, options, tuning, &mut times.levels)?;
+        let input = input.as_ref().unwrap_or(&mesh.geometry);
+        let chain = build_lods_timed(mesh, input, skeleton, options, tuning, &mut times.levels)?;
         mesh.lods = chain.lods;
         mesh.lods_not_built = chain.not_built;
         let report = MeshLodReport {

@@ -43,6 +43,10 @@ pub struct LodTuning {
     /// Simplify all material ranges in one call, their borders as seams (true), or each range
     /// alone towards its share of the target with its border vertices locked (false).
     pub whole_mesh: bool,
+    /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
+    /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
+    /// rest and under the test poses (the larger distance) with no more triangles.
+    pub plain_candidate: bool,
 }
 
 impl Default for LodTuning {
@@ -57,6 +61,7 @@ impl Default for LodTuning {
             anchor_part_extremes: true,
             repair_far_vertices: true,
             whole_mesh: true,
+            plain_candidate: true,
         }
     }
 }
@@ -77,6 +82,10 @@ const NORMAL_WEIGHT: f32 = 0.2;
 const UV_WEIGHT: f32 = 0.5;
 const POSE_WEIGHT: f32 = 4.0;
 const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
+/// gltfpack's normal weight (`simplifyAttributes` in its mesh.cpp).
+const PLAIN_NORMAL_WEIGHT: f32 = 0.5;
+/// gltfpack's default error limit (`-se`), relative to the mesh's extent.
+const PLAIN_ERROR: f32 = 0.01;
 
 /// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
 fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
@@ -132,17 +141,22 @@ fn extent(positions: &[glam::Vec3]) -> f32 {
     }
 }
 
-fn attributes(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<f32> {
-    let n = lod.positions.len();
-    let scale = extent(&lod.positions);
-    let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
-    let poses: Vec<Vec<glam::Vec3>> = match skeleton {
+/// `lod`'s vertices under the two test poses (every joint turned about its local X, then about
+/// its local Z); none when it is not skinned to a skeleton.
+pub(super) fn test_poses(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<Vec<glam::Vec3>> {
+    match skeleton {
         Some(s) if lod.is_skinned() && !s.is_empty() => [glam::Vec3::X, glam::Vec3::Z]
             .iter()
             .map(|&axis| posed_positions(lod, s, axis))
             .collect(),
         _ => Vec::new(),
-    };
+    }
+}
+
+fn attributes(lod: &Lod, poses: &[Vec<glam::Vec3>]) -> Vec<f32> {
+    let n = lod.positions.len();
+    let scale = extent(&lod.positions);
+    let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
     let mut out = vec![0.0f32; n * ATTRIBUTE_COUNT];
     for v in 0..n {
         let a = &mut out[v * ATTRIBUTE_COUNT..(v + 1) * ATTRIBUTE_COUNT];
@@ -302,6 +316,12 @@ pub(super) struct Step<'a> {
     of: Vec<u32>,
     ids: (usize, Vec<u32>),
     whole: bool,
+    /// The source's vertices under the test poses ([`test_poses`]).
+    pub(super) poses: Vec<Vec<glam::Vec3>>,
+    /// A plain build (see [`Step::plain`]): normals alone weigh or nothing does, no vertex flags.
+    plain: bool,
+    /// Attributes per vertex in `attrs` (the first of `weights`).
+    count: usize,
 }
 
 impl<'a> Step<'a> {
@@ -323,20 +343,81 @@ impl<'a> Step<'a> {
         if tuning.permissive {
             flags |= SimplifyOptions::Permissive;
         }
+        let poses = test_poses(source, skeleton);
         Step {
             source,
             positions: source.positions.iter().map(|p| p.to_array()).collect(),
-            attrs: attributes(source, skeleton),
+            attrs: attributes(source, &poses),
             weights,
             flags,
             of: submesh_of(source),
             ids: position_ids(&source.positions),
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
+            poses,
+            plain: false,
+            count: ATTRIBUTE_COUNT,
         }
+    }
+
+    /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one (`normals`):
+    /// normals weigh (0.5), UVs and the test poses do not (a UV or skin seam still holds), no
+    /// vertex is protected, locked or given priority, with meshoptimizer's `Prune` and, for a
+    /// skinned source, its full `Regularize`, first within gltfpack's error limit (1%) and then
+    /// on to the target. Without `normals`, on positions alone: no attribute, `Prune` only, in
+    /// one call. `poses`: the source's vertices under the test poses.
+    pub(super) fn plain(
+        source: &'a Lod,
+        poses: Vec<Vec<glam::Vec3>>,
+        tuning: &LodTuning,
+        normals: bool,
+    ) -> Self {
+        let mut weights = [0.0f32; ATTRIBUTE_COUNT];
+        let mut flags = SimplifyOptions::Prune;
+        let (attrs, count) = if normals {
+            weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
+            if source.is_skinned() {
+                flags |= SimplifyOptions::Regularize;
+            }
+            let attrs = source.normals.iter().flat_map(|n| n.to_array()).collect();
+            (attrs, 3)
+        } else {
+            (Vec::new(), 0)
+        };
+        Step {
+            source,
+            positions: source.positions.iter().map(|p| p.to_array()).collect(),
+            attrs,
+            weights,
+            flags,
+            of: submesh_of(source),
+            ids: position_ids(&source.positions),
+            whole: tuning.whole_mesh && source.submeshes.len() > 1,
+            poses,
+            plain: true,
+            count,
+        }
+    }
+
+    /// The step's (welded) source.
+    pub(super) fn source(&self) -> &'a Lod {
+        self.source
     }
 
     /// The per-vertex flags ([`vertex_flags`]) with `keep`'s positions locked or given priority.
     fn flags(&self, lock_borders: bool, keep: &Anchors) -> Vec<SimplifyVertex> {
+        if self.plain {
+            // No flags, but material borders locked when each range is simplified alone.
+            let mut flags = vec![SimplifyVertex::None; self.positions.len()];
+            if lock_borders && self.source.submeshes.len() > 1 {
+                let borders = vertex_flags_with(self.source, &self.of, &self.ids, true, false);
+                for (f, b) in flags.iter_mut().zip(borders) {
+                    if b == SimplifyVertex::Lock {
+                        *f = SimplifyVertex::Lock;
+                    }
+                }
+            }
+            return flags;
+        }
         let mut locks = vertex_flags_with(
             self.source,
             &self.of,
@@ -362,13 +443,45 @@ impl<'a> Step<'a> {
         target: usize,
         max_error: f32,
     ) -> (Vec<u32>, f32) {
+        if self.plain && self.count > 0 && max_error > PLAIN_ERROR {
+            // gltfpack's error limit first (it changes which collapses each pass makes, not only
+            // where simplification stops), then on to the target from there.
+            let (first, err) = self.simplify_once(part, locks, target, PLAIN_ERROR);
+            if first.len() <= target * 3 {
+                return (first, err);
+            }
+            let (out, more) = self.simplify_once(&first, locks, target, max_error);
+            return (out, err + more);
+        }
+        self.simplify_once(part, locks, target, max_error)
+    }
+
+    fn simplify_once(
+        &self,
+        part: &[u32],
+        locks: &[SimplifyVertex],
+        target: usize,
+        max_error: f32,
+    ) -> (Vec<u32>, f32) {
         let mut err = 0.0f32;
+        if self.count == 0 {
+            let out = meshopt::simplify_with_locks_decoder(
+                part,
+                &self.positions,
+                locks,
+                target * 3,
+                max_error,
+                self.flags,
+                Some(&mut err),
+            );
+            return (out, err);
+        }
         let out = meshopt::simplify_with_attributes_and_locks_decoder(
             part,
             &self.positions,
             &self.attrs,
-            &self.weights,
-            ATTRIBUTE_COUNT * std::mem::size_of::<f32>(),
+            &self.weights[..self.count],
+            self.count * std::mem::size_of::<f32>(),
             locks,
             target * 3,
             max_error,

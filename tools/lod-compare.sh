@@ -8,7 +8,8 @@
 # its chain at gltfpack's counts, and prints one JSON line per mesh and level; tools/lod-table.py
 # turns them into the tables of docs/lod.md.
 #
-# usage: GLTFPACK=/path/to/gltfpack tools/lod-compare.sh OUT.jsonl [FILE ...]
+# usage: GLTFPACK=/path/to/gltfpack [PLAIN=1] tools/lod-compare.sh OUT.jsonl [FILE ...]
+#   (PLAIN=1: sinew's chains with the plain builds of `convert --effort max`)
 #   (default files: the corpus meshes and fixtures of docs/lod.md; GLTFPACK defaults to the
 #   peers' build, /work/peers/gltfpack-build/gltfpack)
 set -euo pipefail
@@ -41,6 +42,8 @@ for input in "$@"; do
       inputs+=("$glb") ;;
   esac
 done
-"$root/target/release/examples/lod_peers" --gltfpack "$gltfpack" \
+plain=()
+if [ -n "${PLAIN:-}" ]; then plain=(--plain); fi
+"$root/target/release/examples/lod_peers" --gltfpack "$gltfpack" "${plain[@]}" \
   --pose-at 0.125 --pose-at 0.25 --pose-at 0.5 --pose-at 0.75 "${inputs[@]}" > "$out"
 echo "wrote $out ($(wc -l < "$out") rows)"

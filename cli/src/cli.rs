@@ -176,7 +176,8 @@ pub struct CompressArgs {
     #[arg(long, value_name = "D")]
     pub error_distance: Option<f32>,
     /// How hard the clip encoder searches for small clips (every effort keeps the tolerance):
-    /// `fast` tries fewer layouts, `max` more (never larger than `default`).
+    /// `fast` tries fewer layouts, `max` more (never larger than `default`); `max` also builds
+    /// each LOD step the plain ways and keeps the closest (docs/lod.md).
     #[arg(long, value_enum, default_value_t = EffortArg::Default)]
     pub effort: EffortArg,
 }
@@ -189,7 +190,8 @@ pub enum EffortArg {
     /// The default search.
     #[default]
     Default,
-    /// More key budgets, segment lengths and refined candidates; slower, never larger.
+    /// More key budgets, segment lengths and refined candidates; slower, never larger; and the
+    /// LOD builder's plain candidate builds.
     Max,
 }
 

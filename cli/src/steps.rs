@@ -10,7 +10,7 @@ use crate::report::{
 use anyhow::{anyhow, bail, Context};
 use sinew_core::Skeleton;
 use sinew_pipeline::compress::{CompressOptions, Effort};
-use sinew_pipeline::lod::LodOptions;
+use sinew_pipeline::lod::{LodOptions, LodTuning};
 use sinew_pipeline::mapping::{self, JointSet, Mapping, MatchMethod, Side};
 use sinew_pipeline::retarget::{self, RetargetOptions, REST_DIFFERENCE_WARN_DEGREES};
 use sinew_pipeline::split::{self, MaskSpec};
@@ -477,7 +477,23 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
     let Scene {
         meshes, skeleton, ..
     } = scene;
-    mesh_lods(meshes, skeleton.as_ref(), options, file).map(|_| ())
+    mesh_lods(
+        meshes,
+        skeleton.as_ref(),
+        options,
+        &LodTuning::default(),
+        file,
+    )
+    .map(|_| ())
+}
+
+/// The LOD builder's tuning for `--effort`: `max` also builds each step the plain ways and keeps
+/// the closest ([`LodTuning::plain_candidate`]).
+pub fn lod_tuning(effort: EffortArg) -> LodTuning {
+    LodTuning {
+        plain_candidate: effort == EffortArg::Max,
+        ..LodTuning::default()
+    }
 }
 
 /// [`lods`] on a scene's meshes alone (`skeleton` is the scene's), so that its clips can be worked
@@ -486,6 +502,7 @@ pub fn mesh_lods(
     meshes: &mut [sinew_scene::Mesh],
     skeleton: Option<&sinew_core::Skeleton>,
     options: Option<&LodOptions>,
+    tuning: &LodTuning,
     file: &str,
 ) -> anyhow::Result<Vec<sinew_pipeline::lod::MeshLodTimes>> {
     match options {
@@ -496,13 +513,9 @@ pub fn mesh_lods(
             Ok(Vec::new())
         }
         Some(o) => {
-            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
-                meshes,
-                skeleton,
-                o,
-                &Default::default(),
-            )
-            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            let (_, times) =
+                sinew_pipeline::lod::generate_mesh_lods_timed(meshes, skeleton, o, tuning)
+                    .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
             Ok(times)
         }
     }

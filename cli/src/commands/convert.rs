@@ -169,6 +169,8 @@ struct Plan {
     clips: Option<String>,
     split: SplitPlan,
     lod: Option<LodOptions>,
+    /// The LOD builder's tuning (`--effort max` adds the plain builds).
+    lod_tuning: sinew_pipeline::lod::LodTuning,
     compress: Option<CompressOptions>,
     textures: bool,
     /// `--strict`: an input with a warning fails and writes nothing.
@@ -243,6 +245,7 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
                 &mut scene.meshes,
                 scene.skeleton.as_ref(),
                 plan.lod.as_ref(),
+                &plan.lod_tuning,
                 &label,
             )
         },
@@ -548,6 +551,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         clips: args.clips.clone(),
         split,
         lod,
+        lod_tuning: steps::lod_tuning(args.compress.effort),
         compress,
         textures: !args.no_textures,
         strict: args.strict,

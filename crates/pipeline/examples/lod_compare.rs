@@ -187,7 +187,7 @@ fn main() {
                 None,
             ),
             ("no-repair", with(&|t| t.repair_far_vertices = false), None),
-            ("no-plain", with(&|t| t.plain_candidate = false), None),
+            ("plain", with(&|t| t.plain_candidate = true), None),
             ("not-permissive", with(&|t| t.permissive = false), None),
             ("from-lod0", with(&|t| t.chain = false), None),
             ("no-regularize", with(&|t| t.regularize = false), None),

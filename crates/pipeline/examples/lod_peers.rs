@@ -2,7 +2,8 @@
 //! (docs/lod.md, "Against gltfpack at equal triangle counts"; driven by tools/lod-compare.sh).
 //!
 //! `cargo run --release -p sinew-pipeline --example lod_peers -- --gltfpack PATH [--pose-at F]...
-//! [--min-triangles N] FILE.glb|FILE.gltf...`
+//! [--min-triangles N] [--plain] FILE.glb|FILE.gltf...` (`--plain`: with the plain builds of
+//! `convert --effort max`, `LodTuning::plain_candidate`)
 //!
 //! For each glTF file (other formats: export them first with `sinew export FILE -o FILE.glb`, which
 //! is then the reference for both tools) and each of its meshes of at least N triangles (default
@@ -27,7 +28,7 @@ mod lod_common;
 use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods, LodOptions};
+use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::{Path, PathBuf};
@@ -119,12 +120,14 @@ fn main() {
     let mut ats = Vec::new();
     let mut files = Vec::new();
     let mut min_tris = 24usize;
+    let mut tuning = LodTuning::default();
     while !args.is_empty() {
         let a = args.remove(0);
         match a.as_str() {
             "--gltfpack" => exe = Some(PathBuf::from(args.remove(0))),
             "--pose-at" => ats.push(args.remove(0).parse::<f32>().expect("--pose-at F")),
             "--min-triangles" => min_tris = args.remove(0).parse().expect("--min-triangles N"),
+            "--plain" => tuning.plain_candidate = true,
             _ => files.push(PathBuf::from(a)),
         }
     }
@@ -163,7 +166,7 @@ fn main() {
         }
         // sinew's default chain, every mesh.
         let mut s = scene.clone();
-        generate_lods(&mut s, &LodOptions::default()).expect("LODs");
+        generate_lods_tuned(&mut s, &LodOptions::default(), &tuning).expect("LODs");
         for (mi, mesh) in scene.meshes.iter().enumerate() {
             let base = mesh.geometry.triangle_count();
             if base < min_tris {
@@ -222,7 +225,7 @@ fn main() {
                     max_error: None,
                     ..Default::default()
                 };
-                generate_lods(&mut m, &options).expect("matched LODs");
+                generate_lods_tuned(&mut m, &options, &tuning).expect("matched LODs");
                 for (k, o) in g.iter().enumerate() {
                     let rig = same_rig(&r.scene, o, 1e-4);
                     let (g_rest, g_posed) = r.measure(o, None, rig);

@@ -45,7 +45,8 @@ pub struct LodTuning {
     pub whole_mesh: bool,
     /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
     /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
-    /// rest and under the test poses (the larger distance) with no more triangles.
+    /// rest and under the test poses (the larger distance) with no more triangles. Off by default:
+    /// it costs 2.3-2.6x the chain's work (docs/lod.md); `convert --effort max` turns it on.
     pub plain_candidate: bool,
 }
 
@@ -61,7 +62,7 @@ impl Default for LodTuning {
             anchor_part_extremes: true,
             repair_far_vertices: true,
             whole_mesh: true,
-            plain_candidate: true,
+            plain_candidate: false,
         }
     }
 }

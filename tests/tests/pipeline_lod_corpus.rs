@@ -307,29 +307,26 @@ const GLTFPACK_FOX: (usize, f32, f32) = (418, 0.935, 1.125);
 
 /// Builds sinew's chain at the given triangle counts (ratios of LOD 0) and returns its LODs.
 fn chain_at(scene: &Scene, counts: &[usize]) -> Scene {
-    let mut s = scene.clone();
-    let base = s.meshes[0].geometry.triangle_count() as f32;
-    let options = LodOptions {
-        ratios: counts.iter().map(|&c| c as f32 / base).collect(),
-        ..Default::default()
-    };
-    generate_lods(&mut s, &options).unwrap();
-    s
+    chain_tuned_at(scene, counts, &LodTuning::default())
 }
 
 /// [`chain_at`] with the plain builds (`convert --effort max`).
 fn plain_chain_at(scene: &Scene, counts: &[usize]) -> Scene {
+    let tuning = LodTuning {
+        plain_candidate: true,
+        ..LodTuning::default()
+    };
+    chain_tuned_at(scene, counts, &tuning)
+}
+
+fn chain_tuned_at(scene: &Scene, counts: &[usize], tuning: &LodTuning) -> Scene {
     let mut s = scene.clone();
     let base = s.meshes[0].geometry.triangle_count() as f32;
     let options = LodOptions {
         ratios: counts.iter().map(|&c| c as f32 / base).collect(),
         ..Default::default()
     };
-    let tuning = LodTuning {
-        plain_candidate: true,
-        ..LodTuning::default()
-    };
-    generate_lods_tuned(&mut s, &options, &tuning).unwrap();
+    generate_lods_tuned(&mut s, &options, tuning).unwrap();
     s
 }
 

@@ -345,18 +345,41 @@ impl<'a> Step<'a> {
             flags |= SimplifyOptions::Permissive;
         }
         let poses = test_poses(source, skeleton);
+        let attrs = attributes(source, &poses);
+        Step::assemble(
+            source,
+            tuning,
+            (attrs, ATTRIBUTE_COUNT),
+            weights,
+            flags,
+            poses,
+            false,
+        )
+    }
+
+    /// A step of `source` with these attributes (values, per-vertex count), weights, options and
+    /// test poses; `plain`: built as [`Step::plain`] builds.
+    fn assemble(
+        source: &'a Lod,
+        tuning: &LodTuning,
+        (attrs, count): (Vec<f32>, usize),
+        weights: [f32; ATTRIBUTE_COUNT],
+        flags: SimplifyOptions,
+        poses: Vec<Vec<glam::Vec3>>,
+        plain: bool,
+    ) -> Self {
         Step {
             source,
             positions: source.positions.iter().map(|p| p.to_array()).collect(),
-            attrs: attributes(source, &poses),
+            attrs,
             weights,
             flags,
             of: submesh_of(source),
             ids: position_ids(&source.positions),
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
             poses,
-            plain: false,
-            count: ATTRIBUTE_COUNT,
+            plain,
+            count,
         }
     }
 
@@ -374,29 +397,19 @@ impl<'a> Step<'a> {
     ) -> Self {
         let mut weights = [0.0f32; ATTRIBUTE_COUNT];
         let mut flags = SimplifyOptions::Prune;
-        let (attrs, count) = if normals {
+        let attrs = if normals {
             weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
             if source.is_skinned() {
                 flags |= SimplifyOptions::Regularize;
             }
-            let attrs = source.normals.iter().flat_map(|n| n.to_array()).collect();
-            (attrs, 3)
+            (
+                source.normals.iter().flat_map(|n| n.to_array()).collect(),
+                3,
+            )
         } else {
             (Vec::new(), 0)
         };
-        Step {
-            source,
-            positions: source.positions.iter().map(|p| p.to_array()).collect(),
-            attrs,
-            weights,
-            flags,
-            of: submesh_of(source),
-            ids: position_ids(&source.positions),
-            whole: tuning.whole_mesh && source.submeshes.len() > 1,
-            poses,
-            plain: true,
-            count,
-        }
+        Step::assemble(source, tuning, attrs, weights, flags, poses, true)
     }
 
     /// The step's (welded) source.

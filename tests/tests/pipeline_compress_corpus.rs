@@ -242,8 +242,19 @@ const PEER_CLIPS: [(&str, &str, usize); 2] = [
 /// Clip `i` of `plain` (compiled from `scene`) compressed at the peers' setting, which must
 /// compress and keep the 0.001 tolerance measured against the scene's own curves: its record size.
 fn peers_record_size(file: &str, scene: &Scene, plain: &Asset, i: usize) -> usize {
+    record_size_at(file, scene, plain, i, &CompressOptions::peers())
+}
+
+/// [`peers_record_size`] with `options` (the peers' tolerance and distance, any effort).
+fn record_size_at(
+    file: &str,
+    scene: &Scene,
+    plain: &Asset,
+    i: usize,
+    options: &CompressOptions,
+) -> usize {
     let clip = &plain.clips[i];
-    let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &CompressOptions::peers());
+    let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), options);
     assert!(c.is_compressed(), "{file} {:?}: {r:?}", clip.name());
     let err = max_error(
         plain.skeleton.as_ref(),
@@ -313,18 +324,7 @@ fn fast_effort_stays_smaller_than_ozz_on_the_closest_clips() {
         let scene = sinew_import::import_path(&path, &Default::default()).unwrap();
         let plain = compile(&scene).unwrap();
         let i = plain.clips.iter().position(|c| c.name() == name).unwrap();
-        let clip = &plain.clips[i];
-        let (c, r) = compress_clip(clip, plain.skeleton.as_ref(), &options);
-        assert!(c.is_compressed(), "{file} {name}: {r:?}");
-        let err = max_error(
-            plain.skeleton.as_ref(),
-            &scene.clips[i],
-            clip.times(),
-            &c,
-            0.1,
-        );
-        assert!(err <= 0.001, "{file} {name}: error {err}");
-        let size = clip_record_size(&c);
+        let size = record_size_at(file, &scene, &plain, i, &options);
         assert!(size < ozz, "{file} {name}: fast {size} B, ozz {ozz} B");
         checked += 1;
     }

@@ -11,7 +11,7 @@
 #![allow(clippy::unwrap_used)]
 
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler};
+use sinew_core::{ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{generate_lods, generate_lods_tuned, LodOptions, LodTuning};
 use sinew_scene::Scene;
@@ -30,15 +30,7 @@ fn load(relative: &str) -> Option<Scene> {
 fn mid_palette(scene: &Scene) -> Option<Vec<Mat4>> {
     let skeleton = scene.skeleton.as_ref()?;
     let c = scene.clips.first()?;
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .unwrap();
+    let clip = c.to_clip().unwrap();
     assert!(clip.duration() > 0.0, "clip {} has no duration", c.name);
     let binding = ClipBinding::new(&clip, skeleton);
     let mut locals = skeleton.bind_local().to_vec();

@@ -290,15 +290,7 @@ mod tests {
         let bytes = format::write(&asset()).unwrap();
         let s = import("a.sinew", &bytes, &no_files, &ImportOptions::default()).unwrap();
         let c = &s.clips[0];
-        let again = Clip::from_curves(
-            c.name.clone(),
-            c.duration,
-            c.sample_rate,
-            c.looping,
-            c.additive,
-            c.tracks.clone(),
-        )
-        .unwrap();
+        let again = c.to_clip().unwrap();
         assert_eq!(again, clip());
     }
 

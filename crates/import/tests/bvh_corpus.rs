@@ -3,7 +3,7 @@
 #![allow(clippy::unwrap_used)]
 
 use sinew_core::glam::{Mat3, Quat, Vec3};
-use sinew_core::{Clip, ClipBinding, Sampler, Transform};
+use sinew_core::{ClipBinding, Sampler, Transform};
 use sinew_import::{bvh, ImportError, ImportOptions, Location};
 use sinew_scene::Scene;
 use sinew_testdata::read_corpus;
@@ -107,15 +107,7 @@ fn expected_local(r: &Raw, j: usize, k: usize) -> (Vec3, Mat3) {
 fn check_frames(s: &Scene, r: &Raw, frames: &[usize]) {
     let sk = s.skeleton.as_ref().unwrap();
     let sc = &s.clips[0];
-    let clip = Clip::from_curves(
-        sc.name.clone(),
-        sc.duration,
-        sc.sample_rate,
-        sc.looping,
-        sc.additive,
-        sc.tracks.clone(),
-    )
-    .unwrap();
+    let clip = sc.to_clip().unwrap();
     let binding = ClipBinding::new(&clip, sk);
     assert!(binding.unmatched().is_empty());
     let mut sampler = Sampler::new();

@@ -217,16 +217,7 @@ fn sinew_skinned(scene: &Scene, clip: &Clip, t: f32) -> Vec<Vec3> {
 }
 
 fn scene_clip(scene: &Scene, i: usize) -> Clip {
-    let c = &scene.clips[i];
-    Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .unwrap()
+    scene.clips[i].to_clip().unwrap()
 }
 
 fn check_skinning(rel: &str, anim: usize, times: &[f32]) {

@@ -111,15 +111,7 @@ fn compile_clips(clips: &[SceneClip]) -> Result<Vec<Clip>, CompileError> {
     clips
         .iter()
         .map(|c| {
-            Clip::from_curves(
-                c.name.clone(),
-                c.duration,
-                c.sample_rate,
-                c.looping,
-                c.additive,
-                c.tracks.clone(),
-            )
-            .map_err(|source| CompileError::Clip {
+            c.to_clip().map_err(|source| CompileError::Clip {
                 clip: c.name.clone(),
                 source,
             })

@@ -14,7 +14,7 @@
 //!   where the source gives one position several normals or UVs, and `source_vertex` maps back.
 
 pub use sinew_core::format::{Axes, Axis};
-use sinew_core::{Lod, Skeleton, TrackCurves};
+use sinew_core::{Clip, ClipError, Lod, Skeleton, TrackCurves};
 
 pub use sinew_core;
 
@@ -247,6 +247,20 @@ pub struct SceneClip {
     pub additive: bool,
     /// One entry per driven joint name.
     pub tracks: Vec<TrackCurves>,
+}
+
+impl SceneClip {
+    /// The runtime clip of these curves ([`Clip::from_curves`]).
+    pub fn to_clip(&self) -> Result<Clip, ClipError> {
+        Clip::from_curves(
+            self.name.clone(),
+            self.duration,
+            self.sample_rate,
+            self.looping,
+            self.additive,
+            self.tracks.clone(),
+        )
+    }
 }
 
 /// A named per-joint weight mask: `(joint name, weight)` pairs, unlisted joints weigh 0.

@@ -2,7 +2,7 @@
 //! triangle soup, at rest or posed by a skinning palette of its first clip.
 
 use sinew_core::glam::{Mat4, Vec3};
-use sinew_core::{Clip, ClipBinding, Lod, Sampler};
+use sinew_core::{ClipBinding, Lod, Sampler};
 use sinew_scene::Scene;
 
 /// A mesh's LOD at `level` (None: LOD 0); a mesh without that level (not built) gives the last
@@ -63,15 +63,7 @@ pub fn soup(
 pub fn pose_palette(scene: &Scene, at: f32) -> Option<(Vec<Mat4>, String, f32)> {
     let skeleton = scene.skeleton.as_ref()?;
     let c = scene.clips.first()?;
-    let clip = Clip::from_curves(
-        c.name.clone(),
-        c.duration,
-        c.sample_rate,
-        c.looping,
-        c.additive,
-        c.tracks.clone(),
-    )
-    .ok()?;
+    let clip = c.to_clip().ok()?;
     let binding = ClipBinding::new(&clip, skeleton);
     let mut locals = skeleton.bind_local().to_vec();
     let t = clip.duration() * at;

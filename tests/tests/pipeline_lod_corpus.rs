@@ -449,6 +449,41 @@ const GLTFPACK_LIGHT: [(&str, usize, f32); 3] = [
     ("obj/spot.obj", 2928, 0.276),
 ];
 
+/// gltfpack 1.2 with `-sa` (the peers' build, `-si 0.25 -sa -kn -noq`) at rest, % of the diagonal:
+/// (file, mesh, triangles, distance). Counts its precise pass does not reach within its 1% limit,
+/// which its sloppy pass (vertex clustering) reaches; sinew's plain builds end the same way
+/// (`convert --effort max`, docs/lod.md).
+const GLTFPACK_AGGRESSIVE: [(&str, &str, usize, f32); 2] = [
+    ("gltf/RiggedSimple.glb", "Cylinder", 44, 1.090),
+    ("obj/spider.obj", "Zahn", 24, 2.850),
+];
+
+#[test]
+fn aggressive_reductions_at_least_as_close_as_gltfpack_at_rest() {
+    for (file, mesh, tris, rest) in GLTFPACK_AGGRESSIVE {
+        let Some(mut scene) = load(file) else {
+            return;
+        };
+        scene.meshes.retain(|m| m.name == mesh);
+        assert_eq!(scene.meshes.len(), 1, "{file}: mesh {mesh}");
+        let base = &scene.meshes[0].geometry;
+        let diag = diagonal(&base.positions);
+        let matched = plain_chain_at(&scene, &[tris]);
+        let lod = &matched.meshes[0].lods[0].lod;
+        assert!(
+            lod.triangle_count() <= tris,
+            "{file} {mesh}: {}",
+            lod.triangle_count()
+        );
+        let r =
+            hausdorff(&base.positions, &base.indices, &lod.positions, &lod.indices) / diag * 100.0;
+        assert!(
+            r <= rest + 0.001,
+            "{file} {mesh}: {tris} triangles: rest {r:.3}% vs gltfpack -sa {rest}%"
+        );
+    }
+}
+
 #[test]
 fn light_reductions_at_least_as_close_as_gltfpack_at_rest() {
     for (file, tris, rest) in GLTFPACK_LIGHT {

@@ -26,8 +26,9 @@
 //! - `Priority` on the extreme vertices of every connected part, whatever its size (`lod_parts`);
 //! - a repair build: LOD 0's farthest vertices from the step's result are locked, each with one
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
-//! - two plain builds of the same target from LOD 0 as it came in (gltfpack's way, then on
-//!   positions alone: `Step::plain`), each kept instead when it has no more triangles and is
+//! - with `LodTuning::plain_candidate` (`convert --effort max`), three plain builds of the same
+//!   target from LOD 0 as it came in (gltfpack's `-si` way, on positions alone, and gltfpack's
+//!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more triangles and is
 //!   closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and under the test
 //!   poses (ties keep the step's own build).
 //!
@@ -50,7 +51,7 @@ use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 pub use step::LodTuning;
-use step::{first_use_remap, optimize_ranges, Anchors, Step};
+use step::{first_use_remap, optimize_ranges, Anchors, Plain, Step};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
 
 /// A LOD's reported error is at least its measured distance to LOD 0 times this margin: the larger
@@ -374,8 +375,9 @@ fn build_lods_timed(
         Some(source) => {
             let poses = step::test_poses(source, skeleton);
             vec![
-                Step::plain(source, poses.clone(), tuning, true),
-                Step::plain(source, poses, tuning, false),
+                Step::plain(source, poses.clone(), tuning, Plain::Normals),
+                Step::plain(source, poses.clone(), tuning, Plain::Positions),
+                Step::plain(source, poses, tuning, Plain::Sloppy),
             ]
         }
         None => Vec::new(),
@@ -483,7 +485,7 @@ fn build_lods_timed(
             (worst < limit).then_some(worst)
         };
         // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
-        // then on positions alone): a plain build is kept when it has no more triangles and is
+        // on positions alone, and gltfpack's sloppy way): a plain build is kept when it has no more triangles and is
         // closer by `score` than every build before it; ties keep the earlier build. Also says
         // which plain build was kept, if any.
         let build = |keep: &Anchors| {

@@ -46,7 +46,7 @@ pub struct LodTuning {
     /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
     /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
     /// rest and under the test poses (the larger distance) with no more triangles. Off by default:
-    /// it costs 2.3-2.6x the chain's work (docs/lod.md); `convert --effort max` turns it on.
+    /// it costs 2.7-3.1x the chain's work (docs/lod.md); `convert --effort max` turns it on.
     pub plain_candidate: bool,
 }
 
@@ -87,6 +87,20 @@ const TEST_POSE_ANGLE_DEGREES: f32 = 25.0;
 const PLAIN_NORMAL_WEIGHT: f32 = 0.5;
 /// gltfpack's default error limit (`-se`), relative to the mesh's extent.
 const PLAIN_ERROR: f32 = 0.01;
+/// gltfpack's error limit for its sloppy pass under `-sa` (`target_error_aggressive`).
+const SLOPPY_ERROR: f32 = 0.1;
+
+/// How a plain build ([`Step::plain`]) goes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Plain {
+    /// gltfpack's `-si`: normals weigh, within 1% first, then on to the target.
+    Normals,
+    /// On positions alone, in one call.
+    Positions,
+    /// gltfpack's `-si -sa`: normals weigh, within 1%, then meshoptimizer's sloppy simplifier
+    /// (vertex clustering, which ignores attribute seams) on to the target within 10%.
+    Sloppy,
+}
 
 /// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
 fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
@@ -320,7 +334,7 @@ pub(super) struct Step<'a> {
     /// The source's vertices under the test poses ([`test_poses`]).
     pub(super) poses: Vec<Vec<glam::Vec3>>,
     /// A plain build (see [`Step::plain`]): normals alone weigh or nothing does, no vertex flags.
-    plain: bool,
+    plain: Option<Plain>,
     /// Attributes per vertex in `attrs` (the first of `weights`).
     count: usize,
 }
@@ -353,7 +367,7 @@ impl<'a> Step<'a> {
             weights,
             flags,
             poses,
-            false,
+            None,
         )
     }
 
@@ -366,7 +380,7 @@ impl<'a> Step<'a> {
         weights: [f32; ATTRIBUTE_COUNT],
         flags: SimplifyOptions,
         poses: Vec<Vec<glam::Vec3>>,
-        plain: bool,
+        plain: Option<Plain>,
     ) -> Self {
         Step {
             source,
@@ -383,21 +397,22 @@ impl<'a> Step<'a> {
         }
     }
 
-    /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one (`normals`):
-    /// normals weigh (0.5), UVs and the test poses do not (a UV or skin seam still holds), no
-    /// vertex is protected, locked or given priority, with meshoptimizer's `Prune` and, for a
-    /// skinned source, its full `Regularize`, first within gltfpack's error limit (1%) and then
-    /// on to the target. Without `normals`, on positions alone: no attribute, `Prune` only, in
-    /// one call. `poses`: the source's vertices under the test poses.
+    /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one
+    /// ([`Plain::Normals`]): normals weigh (0.5), UVs and the test poses do not (a UV or skin seam
+    /// still holds), no vertex is protected, locked or given priority, with meshoptimizer's `Prune`
+    /// and, for a skinned source, its full `Regularize`, first within gltfpack's error limit (1%)
+    /// and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
+    /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
+    /// `poses`: the source's vertices under the test poses.
     pub(super) fn plain(
         source: &'a Lod,
         poses: Vec<Vec<glam::Vec3>>,
         tuning: &LodTuning,
-        normals: bool,
+        kind: Plain,
     ) -> Self {
         let mut weights = [0.0f32; ATTRIBUTE_COUNT];
         let mut flags = SimplifyOptions::Prune;
-        let attrs = if normals {
+        let attrs = if kind != Plain::Positions {
             weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
             if source.is_skinned() {
                 flags |= SimplifyOptions::Regularize;
@@ -409,7 +424,7 @@ impl<'a> Step<'a> {
         } else {
             (Vec::new(), 0)
         };
-        Step::assemble(source, tuning, attrs, weights, flags, poses, true)
+        Step::assemble(source, tuning, attrs, weights, flags, poses, Some(kind))
     }
 
     /// The step's (welded) source.
@@ -419,7 +434,7 @@ impl<'a> Step<'a> {
 
     /// The per-vertex flags ([`vertex_flags`]) with `keep`'s positions locked or given priority.
     fn flags(&self, lock_borders: bool, keep: &Anchors) -> Vec<SimplifyVertex> {
-        if self.plain {
+        if self.plain.is_some() {
             // No flags, but material borders locked when each range is simplified alone.
             let mut flags = vec![SimplifyVertex::None; self.positions.len()];
             if lock_borders && self.source.submeshes.len() > 1 {
@@ -457,12 +472,24 @@ impl<'a> Step<'a> {
         target: usize,
         max_error: f32,
     ) -> (Vec<u32>, f32) {
-        if self.plain && self.count > 0 && max_error > PLAIN_ERROR {
+        if self.plain.is_some() && self.count > 0 && max_error > PLAIN_ERROR {
             // gltfpack's error limit first (it changes which collapses each pass makes, not only
             // where simplification stops), then on to the target from there.
             let (first, err) = self.simplify_once(part, locks, target, PLAIN_ERROR);
             if first.len() <= target * 3 {
                 return (first, err);
+            }
+            if self.plain == Some(Plain::Sloppy) {
+                let mut more = 0.0f32;
+                let out = meshopt::simplify_sloppy_with_locks_decoder(
+                    &first,
+                    &self.positions,
+                    locks,
+                    target * 3,
+                    SLOPPY_ERROR.min(max_error),
+                    Some(&mut more),
+                );
+                return (out, err.max(more));
             }
             let (out, more) = self.simplify_once(&first, locks, target, max_error);
             return (out, err + more);

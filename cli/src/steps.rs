@@ -475,11 +475,15 @@ pub fn lod_options(args: &LodArgs) -> anyhow::Result<Option<LodOptions>> {
 /// Replaces every mesh's generated LODs by a new chain, or removes them for `None`.
 pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyhow::Result<()> {
     let Scene {
-        meshes, skeleton, ..
+        meshes,
+        skeleton,
+        clips,
+        ..
     } = scene;
     mesh_lods(
         meshes,
         skeleton.as_ref(),
+        clips,
         options,
         &LodTuning::default(),
         file,
@@ -501,6 +505,7 @@ pub fn lod_tuning(effort: EffortArg) -> LodTuning {
 pub fn mesh_lods(
     meshes: &mut [sinew_scene::Mesh],
     skeleton: Option<&sinew_core::Skeleton>,
+    clips: &[sinew_scene::SceneClip],
     options: Option<&LodOptions>,
     tuning: &LodTuning,
     file: &str,
@@ -513,9 +518,15 @@ pub fn mesh_lods(
             Ok(Vec::new())
         }
         Some(o) => {
-            let (_, times) =
-                sinew_pipeline::lod::generate_mesh_lods_timed(meshes, skeleton, o, tuning)
-                    .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            // The plain builds are also compared under poses of the scene's own clips.
+            let reference = match skeleton {
+                Some(s) if tuning.plain_candidate => sinew_pipeline::lod::reference_poses(clips, s),
+                _ => Vec::new(),
+            };
+            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
+                meshes, skeleton, o, tuning, &reference,
+            )
+            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
             Ok(times)
         }
     }

@@ -244,6 +244,7 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
             steps::mesh_lods(
                 &mut scene.meshes,
                 scene.skeleton.as_ref(),
+                &scene.clips,
                 plan.lod.as_ref(),
                 &plan.lod_tuning,
                 &label,

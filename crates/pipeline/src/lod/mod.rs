@@ -28,9 +28,10 @@
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
 //! - with `LodTuning::plain_candidate` (`convert --effort max`), three plain builds of the same
 //!   target from LOD 0 as it came in (gltfpack's `-si` way, on positions alone, and gltfpack's
-//!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more triangles and is
-//!   closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and under the test
-//!   poses (ties keep the step's own build).
+//!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
+//!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
+//!   under the test poses, and is no farther under poses sampled from the scene's clips
+//!   ([`reference_poses`]; ties keep the step's own build).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -48,8 +49,8 @@ use measure::{
 };
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
-use sinew_core::{Lod, Skeleton, MAX_INFLUENCES};
-use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
+use sinew_core::{ClipBinding, Lod, Sampler, Skeleton, Transform, MAX_INFLUENCES};
+use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene, SceneClip};
 pub use step::LodTuning;
 use step::{first_use_remap, optimize_ranges, Anchors, Plain, Step};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
@@ -283,6 +284,7 @@ pub fn build_lods_tuned(
         skeleton,
         options,
         tuning,
+        &[],
         &mut Vec::new(),
     )
 }
@@ -296,6 +298,7 @@ fn build_lods_timed(
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
+    reference: &[Vec<Transform>],
     seconds: &mut Vec<f64>,
 ) -> Result<LodChain, LodError> {
     options.validate()?;
@@ -372,27 +375,35 @@ fn build_lods_timed(
         None
     };
     let plains: Vec<Step> = match &plain_source {
-        Some(source) => {
-            let poses = step::test_poses(source, skeleton);
-            vec![
-                Step::plain(source, poses.clone(), tuning, Plain::Normals),
-                Step::plain(source, poses.clone(), tuning, Plain::Positions),
-                Step::plain(source, poses, tuning, Plain::Sloppy),
-            ]
-        }
+        Some(source) => vec![
+            Step::plain(source, tuning, Plain::Normals),
+            Step::plain(source, tuning, Plain::Positions),
+            Step::plain(source, tuning, Plain::Sloppy),
+        ],
         None => Vec::new(),
     };
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
-    // (skinned meshes), and its vertices, centroids and edge midpoints at rest.
-    let posed_base = if tuning.plain_candidate {
-        step::test_poses(&mesh.geometry, skeleton)
-    } else {
-        Vec::new()
+    // (skinned meshes) and its vertices, centroids and edge midpoints at rest; then LOD 0's
+    // vertices under the reference poses. The plain builds' source under the same poses.
+    let points_of = |poses: &[Vec<Vec3>]| -> Vec<Vec<Vec3>> {
+        poses
+            .iter()
+            .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
+            .collect()
     };
-    let posed_points: Vec<Vec<Vec3>> = posed_base
-        .iter()
-        .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
-        .collect();
+    let (posed_points, reference_points, plain_posed, plain_reference) = match &plain_source {
+        Some(source) => (
+            points_of(&step::test_poses(&mesh.geometry, skeleton)),
+            points_of(&step::reference_positions(
+                &mesh.geometry,
+                skeleton,
+                reference,
+            )),
+            step::test_poses(source, skeleton),
+            step::reference_positions(source, skeleton, reference),
+        ),
+        None => Default::default(),
+    };
     let base_dense = if tuning.plain_candidate {
         // Centroids and edge midpoints (`sample_points` puts them first): the vertices are in
         // `base_points`.
@@ -441,6 +452,14 @@ fn build_lods_timed(
             problem: format!("after welding: {problem}"),
         })?;
         let step = Step::new(&welded, skeleton, tuning);
+        let (step_posed, step_reference) = if plains.is_empty() {
+            Default::default()
+        } else {
+            (
+                step::test_poses(&welded, skeleton),
+                step::reference_positions(&welded, skeleton, reference),
+            )
+        };
         // One build of the step and its repair build; the closer with no more triangles.
         let build_current = |keep: &Anchors| {
             let built = step.run(target, budget, keep);
@@ -478,16 +497,39 @@ fn build_lods_timed(
         // indices refer to.
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = 0.0f32;
-            for (positions, points) in from.poses.iter().zip(&posed_points) {
+            let posed = if from.is_plain() {
+                &plain_posed
+            } else {
+                &step_posed
+            };
+            for (positions, points) in posed.iter().zip(&posed_points) {
                 worst = worst.max(lost_below(positions, indices, points, limit)?);
             }
             worst = worst.max(with_points(m, &base_dense, limit)?);
             (worst < limit).then_some(worst)
         };
+        // The largest distance of LOD 0's vertices from a build under the reference poses (0
+        // without them).
+        let reference_score = |from: &Step, indices: &[u32]| -> f32 {
+            let posed = if from.is_plain() {
+                &plain_reference
+            } else {
+                &step_reference
+            };
+            posed
+                .iter()
+                .zip(&reference_points)
+                .map(|(positions, points)| {
+                    lost_below(positions, indices, points, f32::INFINITY).unwrap_or(f32::INFINITY)
+                })
+                .fold(0.0, f32::max)
+        };
         // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
-        // on positions alone, and gltfpack's sloppy way): a plain build is kept when it has no more triangles and is
-        // closer by `score` than every build before it; ties keep the earlier build. Also says
-        // which plain build was kept, if any.
+        // on positions alone, and gltfpack's sloppy way): a plain build is kept when it has no
+        // more triangles, is closer by `score` than every build before it and no farther by
+        // `reference_score` (a veto, not part of `score`: one far pose of many must not outweigh
+        // rest and the test poses); ties keep the earlier build. Also says which plain build was
+        // kept, if any.
         let build = |keep: &Anchors| {
             let (built, m) = build_current(keep);
             let most = built.indices.len().max(3 * (target + slack));
@@ -498,6 +540,7 @@ fn build_lods_timed(
             let Some(mut limit) = score(&step, &best.0.indices, &best.1, f32::INFINITY) else {
                 return best;
             };
+            let mut reference_limit = reference_score(&step, &best.0.indices);
             for (i, plain) in plains.iter().enumerate() {
                 let other = plain.run(target, plain_budget, keep);
                 if other.indices.len() > most {
@@ -513,8 +556,12 @@ fn build_lods_timed(
                 ) else {
                     continue;
                 };
-                if let Some(s2) = score(plain, &other.indices, &m2, limit) {
-                    (best, limit) = ((other, m2, Some(i)), s2);
+                let Some(s2) = score(plain, &other.indices, &m2, limit) else {
+                    continue;
+                };
+                let r2 = reference_score(plain, &other.indices);
+                if r2 <= reference_limit {
+                    (best, limit, reference_limit) = ((other, m2, Some(i)), s2, r2);
                 }
             }
             best
@@ -631,22 +678,63 @@ pub fn generate_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
+    let reference = match (&scene.skeleton, tuning.plain_candidate) {
+        (Some(s), true) => reference_poses(&scene.clips, s),
+        _ => Vec::new(),
+    };
     let Scene {
         meshes, skeleton, ..
     } = scene;
-    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning)
+    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning, &reference)
+}
+
+/// Poses sampled from each clip, at most this many in all.
+const REFERENCE_POSES: usize = 16;
+/// Poses sampled from one clip, at most.
+const REFERENCE_POSES_PER_CLIP: usize = 8;
+
+/// The reference poses the plain builds are compared under besides the test poses
+/// ([`LodTuning::plain_candidate`]): each clip's local pose (the runtime's sampler) at the middle
+/// of each eighth of its duration, at most [`REFERENCE_POSES`] in all, the first clips' first
+/// (fewer per clip when there are more than two clips). A clip that does not bind gives none.
+pub fn reference_poses(clips: &[SceneClip], skeleton: &Skeleton) -> Vec<Vec<Transform>> {
+    let per_clip = (REFERENCE_POSES / clips.len().max(1)).clamp(1, REFERENCE_POSES_PER_CLIP);
+    let mut poses = Vec::new();
+    let mut sampler = Sampler::new();
+    for c in clips {
+        let Ok(clip) = c.to_clip() else {
+            continue;
+        };
+        let binding = ClipBinding::new(&clip, skeleton);
+        for k in 0..per_clip {
+            if poses.len() == REFERENCE_POSES {
+                return poses;
+            }
+            let at = clip.duration() * (k as f32 + 0.5) / per_clip as f32;
+            let mut locals = skeleton.bind_local().to_vec();
+            if sampler
+                .sample(&clip, &binding, skeleton, at, &mut locals)
+                .is_ok()
+            {
+                poses.push(locals);
+            }
+        }
+    }
+    poses
 }
 
 /// [`generate_lods_tuned`] on a scene's meshes alone, so that a caller can work on the scene's clips
-/// at the same time. Meshes are independent: they run in parallel (rayon), each with the same
-/// result as alone; the first failing mesh in mesh order gives the error.
+/// at the same time (`reference`: [`reference_poses`] of the scene's clips when
+/// `tuning.plain_candidate`, else ignored). Meshes are independent: they run in parallel (rayon),
+/// each with the same result as alone; the first failing mesh in mesh order gives the error.
 pub fn generate_mesh_lods(
     meshes: &mut [Mesh],
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
+    reference: &[Vec<Transform>],
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    generate_mesh_lods_timed(meshes, skeleton, options, tuning).map(|(r, _)| r)
+    generate_mesh_lods_timed(meshes, skeleton, options, tuning, reference).map(|(r, _)| r)
 }
 
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
@@ -666,6 +754,7 @@ pub fn generate_mesh_lods_timed(
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
+    reference: &[Vec<Transform>],
 ) -> Result<(Vec<MeshLodReport>, Vec<MeshLodTimes>), LodError> {
     options.validate()?;
     let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
@@ -678,7 +767,15 @@ pub fn generate_mesh_lods_timed(
             levels: Vec::new(),
         };
         let input = input.as_ref().unwrap_or(&mesh.geometry);
-        let chain = build_lods_timed(mesh, input, skeleton, options, tuning, &mut times.levels)?;
+        let chain = build_lods_timed(
+            mesh,
+            input,
+            skeleton,
+            options,
+            tuning,
+            reference,
+            &mut times.levels,
+        )?;
         mesh.lods = chain.lods;
         mesh.lods_not_built = chain.not_built;
         let report = MeshLodReport {

@@ -46,7 +46,7 @@ pub struct LodTuning {
     /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
     /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
     /// rest and under the test poses (the larger distance) with no more triangles. Off by default:
-    /// it costs 2.7-3.1x the chain's work (docs/lod.md); `convert --effort max` turns it on.
+    /// it costs 3.4-4.0x the chain's work (docs/lod.md); `convert --effort max` turns it on.
     pub plain_candidate: bool,
 }
 
@@ -113,6 +113,11 @@ fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam
             ..*b
         })
         .collect();
+    skinned(lod, skeleton, &locals)
+}
+
+/// Model-space positions of every vertex under the local pose `locals` (one per joint).
+fn skinned(lod: &Lod, skeleton: &Skeleton, locals: &[Transform]) -> Vec<glam::Vec3> {
     // The runtime's own local-to-model, palette and skinning, so the test poses deform exactly as a
     // game would draw them. Joint indices were validated by the caller; on any error the vertices keep
     // their bind positions (no displacement attribute).
@@ -121,7 +126,7 @@ fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam
     let mut out = lod.positions.clone();
     let posed = skinning::local_to_model_and_palette(
         skeleton.parents(),
-        &locals,
+        locals,
         skeleton.inverse_bind(),
         &mut models,
         &mut palette,
@@ -163,6 +168,23 @@ pub(super) fn test_poses(lod: &Lod, skeleton: Option<&Skeleton>) -> Vec<Vec<glam
         Some(s) if lod.is_skinned() && !s.is_empty() => [glam::Vec3::X, glam::Vec3::Z]
             .iter()
             .map(|&axis| posed_positions(lod, s, axis))
+            .collect(),
+        _ => Vec::new(),
+    }
+}
+
+/// `lod`'s vertices under each of `reference` (local poses sampled from the scene's clips,
+/// [`super::reference_poses`]); none when it is not skinned to a skeleton.
+pub(super) fn reference_positions(
+    lod: &Lod,
+    skeleton: Option<&Skeleton>,
+    reference: &[Vec<Transform>],
+) -> Vec<Vec<glam::Vec3>> {
+    match skeleton {
+        Some(s) if lod.is_skinned() && !s.is_empty() => reference
+            .iter()
+            .filter(|l| l.len() == s.len())
+            .map(|l| skinned(lod, s, l))
             .collect(),
         _ => Vec::new(),
     }
@@ -331,8 +353,6 @@ pub(super) struct Step<'a> {
     of: Vec<u32>,
     ids: (usize, Vec<u32>),
     whole: bool,
-    /// The source's vertices under the test poses ([`test_poses`]).
-    pub(super) poses: Vec<Vec<glam::Vec3>>,
     /// A plain build (see [`Step::plain`]): normals alone weigh or nothing does, no vertex flags.
     plain: Option<Plain>,
     /// Attributes per vertex in `attrs` (the first of `weights`).
@@ -358,28 +378,25 @@ impl<'a> Step<'a> {
         if tuning.permissive {
             flags |= SimplifyOptions::Permissive;
         }
-        let poses = test_poses(source, skeleton);
-        let attrs = attributes(source, &poses);
+        let attrs = attributes(source, &test_poses(source, skeleton));
         Step::assemble(
             source,
             tuning,
             (attrs, ATTRIBUTE_COUNT),
             weights,
             flags,
-            poses,
             None,
         )
     }
 
-    /// A step of `source` with these attributes (values, per-vertex count), weights, options and
-    /// test poses; `plain`: built as [`Step::plain`] builds.
+    /// A step of `source` with these attributes (values, per-vertex count), weights and options;
+    /// `plain`: built as [`Step::plain`] builds.
     fn assemble(
         source: &'a Lod,
         tuning: &LodTuning,
         (attrs, count): (Vec<f32>, usize),
         weights: [f32; ATTRIBUTE_COUNT],
         flags: SimplifyOptions,
-        poses: Vec<Vec<glam::Vec3>>,
         plain: Option<Plain>,
     ) -> Self {
         Step {
@@ -391,7 +408,6 @@ impl<'a> Step<'a> {
             of: submesh_of(source),
             ids: position_ids(&source.positions),
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
-            poses,
             plain,
             count,
         }
@@ -403,13 +419,7 @@ impl<'a> Step<'a> {
     /// and, for a skinned source, its full `Regularize`, first within gltfpack's error limit (1%)
     /// and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
     /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
-    /// `poses`: the source's vertices under the test poses.
-    pub(super) fn plain(
-        source: &'a Lod,
-        poses: Vec<Vec<glam::Vec3>>,
-        tuning: &LodTuning,
-        kind: Plain,
-    ) -> Self {
+    pub(super) fn plain(source: &'a Lod, tuning: &LodTuning, kind: Plain) -> Self {
         let mut weights = [0.0f32; ATTRIBUTE_COUNT];
         let mut flags = SimplifyOptions::Prune;
         let attrs = if kind != Plain::Positions {
@@ -424,7 +434,12 @@ impl<'a> Step<'a> {
         } else {
             (Vec::new(), 0)
         };
-        Step::assemble(source, tuning, attrs, weights, flags, poses, Some(kind))
+        Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
+    }
+
+    /// Whether this is a plain build ([`Step::plain`]).
+    pub(super) fn is_plain(&self) -> bool {
+        self.plain.is_some()
     }
 
     /// The step's (welded) source.

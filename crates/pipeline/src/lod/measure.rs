@@ -115,6 +115,35 @@ pub(super) fn far_vertices(m: &Measured, base_points: &[Vec3]) -> Vec<Vec3> {
     far.into_iter().map(|(_, i)| base_points[i]).collect()
 }
 
+/// The rest positions (`rest`) of LOD 0's vertices `used` that are farthest from a build in one
+/// pose: `base_posed` is LOD 0's vertices under the pose, `build_posed` the build's source's and
+/// `indices` the build's triangles. Those at least half as far as `farthest` (the largest such
+/// distance, measured before), farthest first (ties in `used`' order), at most
+/// [`REPAIR_VERTICES`].
+pub(super) fn posed_far_vertices(
+    rest: &[Vec3],
+    used: &[u32],
+    (base_posed, build_posed): (&[Vec3], &[Vec3]),
+    indices: &[u32],
+    farthest: f32,
+) -> Vec<Vec3> {
+    let grid = TriangleGrid::new(build_posed, indices);
+    let half = farthest * 0.5;
+    let mut far: Vec<(f32, usize)> = used
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &v)| {
+            let d = grid.distance_above(base_posed[v as usize], half);
+            (d > half && d.is_finite()).then_some((d, i))
+        })
+        .collect();
+    far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    far.truncate(REPAIR_VERTICES);
+    far.into_iter()
+        .map(|(_, i)| rest[used[i] as usize])
+        .collect()
+}
+
 /// The points of `points` with distinct positions (bit for bit), first occurrences, in order.
 pub(super) fn distinct(points: &[Vec3]) -> Vec<Vec3> {
     let (count, ids) = position_ids(points);

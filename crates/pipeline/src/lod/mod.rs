@@ -31,7 +31,9 @@
 //!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
 //!   under the test poses, and is no farther under poses sampled from the scene's clips
-//!   ([`reference_poses`]; ties keep the step's own build).
+//!   ([`reference_poses`]; ties keep the step's own build); then, when the step's own build is
+//!   still the best, a posed repair build (LOD 0's farthest vertices in the pose where the build
+//!   is farthest locked, kept on the same terms).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -45,7 +47,8 @@ mod weld;
 
 use crate::surface::{sample_points, used_vertices, TriangleGrid};
 use measure::{
-    distinct, far_vertices, lost_below, measure, measure_below, repair_locks, with_points, Measured,
+    distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
+    with_points, Measured,
 };
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
@@ -391,18 +394,24 @@ fn build_lods_timed(
             .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
             .collect()
     };
-    let (posed_points, reference_points, plain_posed, plain_reference) = match &plain_source {
+    let (base_posed, base_reference, plain_posed, plain_reference) = match &plain_source {
         Some(source) => (
-            points_of(&step::test_poses(&mesh.geometry, skeleton)),
-            points_of(&step::reference_positions(
-                &mesh.geometry,
-                skeleton,
-                reference,
-            )),
+            step::test_poses(&mesh.geometry, skeleton),
+            step::reference_positions(&mesh.geometry, skeleton, reference),
             step::test_poses(source, skeleton),
             step::reference_positions(source, skeleton, reference),
         ),
         None => Default::default(),
+    };
+    let (posed_points, reference_points) = (points_of(&base_posed), points_of(&base_reference));
+    // LOD 0's vertices that triangles use, for the posed repair build.
+    let base_used: Vec<u32> = if plain_source.is_some() {
+        let mut used = mesh.geometry.indices.clone();
+        used.sort_unstable();
+        used.dedup();
+        used
+    } else {
+        Vec::new()
     };
     let base_dense = if tuning.plain_candidate {
         // Centroids and edge midpoints (`sample_points` puts them first): the vertices are in
@@ -537,10 +546,35 @@ fn build_lods_timed(
             if plains.is_empty() {
                 return best;
             }
-            let Some(mut limit) = score(&step, &best.0.indices, &best.1, f32::INFINITY) else {
+            // The step's own build measured in full: its distance under every pose (test, then
+            // reference), which also says in which pose the posed repair build starts.
+            let own_posed: Vec<f32> = step_posed
+                .iter()
+                .zip(&posed_points)
+                .chain(step_reference.iter().zip(&reference_points))
+                .map(|(positions, points)| {
+                    lost_below(positions, &best.0.indices, points, f32::INFINITY)
+                        .unwrap_or(f32::INFINITY)
+                })
+                .collect();
+            let (own_test, own_reference) = own_posed.split_at(step_posed.len());
+            // `score` and `reference_score` of the step's own build, from those.
+            let Some(rest) = with_points(&best.1, &base_dense, f32::INFINITY) else {
                 return best;
             };
-            let mut reference_limit = reference_score(&step, &best.0.indices);
+            let mut limit = own_test.iter().fold(rest, |a, &b| a.max(b));
+            if !limit.is_finite() {
+                return best;
+            }
+            let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
+            // The pose where the own build is farthest (the first of equals).
+            let worst_pose = own_posed.iter().enumerate().fold(
+                None,
+                |w: Option<(usize, f32)>, (k, &d)| match w {
+                    Some((_, wd)) if wd >= d => w,
+                    _ => Some((k, d)),
+                },
+            );
             for (i, plain) in plains.iter().enumerate() {
                 let other = plain.run(target, plain_budget, keep);
                 if other.indices.len() > most {
@@ -562,6 +596,46 @@ fn build_lods_timed(
                 let r2 = reference_score(plain, &other.indices);
                 if r2 <= reference_limit {
                     (best, limit, reference_limit) = ((other, m2, Some(i)), s2, r2);
+                }
+            }
+            // The posed repair build: when the step's own build is still the best, LOD 0's
+            // vertices farthest from it in the pose where it is farthest (test or reference) are
+            // locked, each with a triangle around it, and the step is built again; kept on the
+            // same terms as a plain build.
+            if let (None, Some((k, farthest))) = (best.2, worst_pose) {
+                let base = base_posed.iter().chain(&base_reference).nth(k);
+                let own = step_posed.iter().chain(&step_reference).nth(k);
+                let far = match (base, own) {
+                    (Some(base), Some(own)) => posed_far_vertices(
+                        &mesh.geometry.positions,
+                        &base_used,
+                        (base, own),
+                        &best.0.indices,
+                        farthest,
+                    ),
+                    _ => Vec::new(),
+                };
+                if !far.is_empty() {
+                    let mut more = keep.clone();
+                    more.hard.extend(repair_locks(&welded, &far));
+                    more.hard.sort_unstable();
+                    more.hard.dedup();
+                    let again = step.run(target, budget, &more);
+                    if again.indices.len() <= most {
+                        let closer = measure_below(
+                            &welded.positions,
+                            &again.indices,
+                            &base_points,
+                            &base_grid,
+                            limit,
+                        )
+                        .filter(|m2| score(&step, &again.indices, m2, limit).is_some());
+                        if let Some(m2) = closer {
+                            if reference_score(&step, &again.indices) <= reference_limit {
+                                best = (again, m2, None);
+                            }
+                        }
+                    }
                 }
             }
             best

@@ -46,7 +46,7 @@ pub struct LodTuning {
     /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
     /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
     /// rest and under the test poses (the larger distance) with no more triangles. Off by default:
-    /// it costs 3.4-4.0x the chain's work (docs/lod.md); `convert --effort max` turns it on.
+    /// with the posed repair build it costs 4.0-5.3x the chain's work (docs/lod.md); `convert --effort max` turns it on.
     pub plain_candidate: bool,
 }
 

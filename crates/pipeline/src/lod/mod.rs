@@ -31,9 +31,9 @@
 //!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
 //!   under the test poses, and is no farther under poses sampled from the scene's clips
-//!   ([`reference_poses`]; ties keep the step's own build); then, when the step's own build is
-//!   still the best, a posed repair build (LOD 0's farthest vertices in the pose where the build
-//!   is farthest locked, kept on the same terms).
+//!   ([`reference_poses`]; ties keep the step's own build); then a posed repair build of the best
+//!   one (LOD 0's farthest vertices in the pose where it is farthest locked, kept on the same
+//!   terms).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -598,13 +598,33 @@ fn build_lods_timed(
                     (best, limit, reference_limit) = ((other, m2, Some(i)), s2, r2);
                 }
             }
-            // The posed repair build: when the step's own build is still the best, LOD 0's
-            // vertices farthest from it in the pose where it is farthest (test or reference) are
-            // locked, each with a triangle around it, and the step is built again; kept on the
-            // same terms as a plain build.
-            if let (None, Some((k, farthest))) = (best.2, worst_pose) {
+            // The posed repair build: LOD 0's vertices farthest from the best build in the pose
+            // where it is farthest (test or reference) are locked, each with a triangle around
+            // it, and that build is made again; kept on the same terms as a plain build.
+            // Which step the best build came from, and that step's source under the poses.
+            let (from, from_posed, from_reference) = match best.2 {
+                None => (&step, &step_posed, &step_reference),
+                Some(i) => (&plains[i], &plain_posed, &plain_reference),
+            };
+            let worst_pose = match best.2 {
+                None => worst_pose,
+                Some(_) => from_posed
+                    .iter()
+                    .zip(&posed_points)
+                    .chain(from_reference.iter().zip(&reference_points))
+                    .map(|(positions, points)| {
+                        lost_below(positions, &best.0.indices, points, f32::INFINITY)
+                            .unwrap_or(f32::INFINITY)
+                    })
+                    .enumerate()
+                    .fold(None, |w: Option<(usize, f32)>, (k, d)| match w {
+                        Some((_, wd)) if wd >= d => w,
+                        _ => Some((k, d)),
+                    }),
+            };
+            if let Some((k, farthest)) = worst_pose {
                 let base = base_posed.iter().chain(&base_reference).nth(k);
-                let own = step_posed.iter().chain(&step_reference).nth(k);
+                let own = from_posed.iter().chain(from_reference).nth(k);
                 let far = match (base, own) {
                     (Some(base), Some(own)) => posed_far_vertices(
                         &mesh.geometry.positions,
@@ -616,23 +636,30 @@ fn build_lods_timed(
                     _ => Vec::new(),
                 };
                 if !far.is_empty() {
+                    let source = from.source();
                     let mut more = keep.clone();
-                    more.hard.extend(repair_locks(&welded, &far));
+                    more.hard.extend(repair_locks(source, &far));
                     more.hard.sort_unstable();
                     more.hard.dedup();
-                    let again = step.run(target, budget, &more);
-                    if again.indices.len() <= most {
+                    let again = if from.is_plain() {
+                        from.run(target, plain_budget, &more)
+                    } else {
+                        from.run(target, budget, &more)
+                    };
+                    // No more triangles than the build it would replace (or the target's).
+                    let fewer = best.0.indices.len().max(3 * (target + slack));
+                    if again.indices.len() <= fewer {
                         let closer = measure_below(
-                            &welded.positions,
+                            &source.positions,
                             &again.indices,
                             &base_points,
                             &base_grid,
                             limit,
                         )
-                        .filter(|m2| score(&step, &again.indices, m2, limit).is_some());
+                        .filter(|m2| score(from, &again.indices, m2, limit).is_some());
                         if let Some(m2) = closer {
-                            if reference_score(&step, &again.indices) <= reference_limit {
-                                best = (again, m2, None);
+                            if reference_score(from, &again.indices) <= reference_limit {
+                                best = (again, m2, best.2);
                             }
                         }
                     }

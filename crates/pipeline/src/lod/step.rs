@@ -415,7 +415,7 @@ impl<'a> Step<'a> {
 
     /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one
     /// ([`Plain::Normals`]): normals weigh (0.5), UVs and the test poses do not (a UV or skin seam
-    /// still holds), no vertex is protected, locked or given priority, with meshoptimizer's `Prune`
+    /// still holds), no vertex is protected, locked (but by a posed repair build) or given priority, with meshoptimizer's `Prune`
     /// and, for a skinned source, its full `Regularize`, first within gltfpack's error limit (1%)
     /// and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
     /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
@@ -456,6 +456,15 @@ impl<'a> Step<'a> {
                 let borders = vertex_flags_with(self.source, &self.of, &self.ids, true, false);
                 for (f, b) in flags.iter_mut().zip(borders) {
                     if b == SimplifyVertex::Lock {
+                        *f = SimplifyVertex::Lock;
+                    }
+                }
+            }
+            // The posed repair build's locks.
+            if !keep.hard.is_empty() {
+                for (f, p) in flags.iter_mut().zip(&self.source.positions) {
+                    let bits = [p.x.to_bits(), p.y.to_bits(), p.z.to_bits()];
+                    if keep.hard.binary_search(&bits).is_ok() {
                         *f = SimplifyVertex::Lock;
                     }
                 }

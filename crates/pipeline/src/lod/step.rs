@@ -415,9 +415,9 @@ impl<'a> Step<'a> {
 
     /// A step of `source` (valid, welded) built the way gltfpack's `-si` builds one
     /// ([`Plain::Normals`]): normals weigh (0.5), UVs and the test poses do not (a UV or skin seam
-    /// still holds), no vertex is protected, locked (but by a posed repair build) or given priority, with meshoptimizer's `Prune`
-    /// and, for a skinned source, its full `Regularize`, first within gltfpack's error limit (1%)
-    /// and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
+    /// still holds), no vertex is protected, locked (but by a posed repair build) or given
+    /// priority, with meshoptimizer's `Prune` and, for a skinned source, its full `Regularize`,
+    /// first within gltfpack's error limit (1%) and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
     /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
     pub(super) fn plain(source: &'a Lod, tuning: &LodTuning, kind: Plain) -> Self {
         let mut weights = [0.0f32; ATTRIBUTE_COUNT];

@@ -517,6 +517,18 @@ fn build_lods_timed(
             worst = worst.max(with_points(m, &base_dense, limit)?);
             (worst < limit).then_some(worst)
         };
+        // The distance of LOD 0's vertices from a build (`indices` into a source under the test
+        // poses, `posed`, and the reference poses, `reference`) under each pose, test poses first.
+        let pose_distances = |posed: &[Vec<Vec3>], reference: &[Vec<Vec3>], indices: &[u32]| {
+            posed
+                .iter()
+                .zip(&posed_points)
+                .chain(reference.iter().zip(&reference_points))
+                .map(|(positions, points)| {
+                    lost_below(positions, indices, points, f32::INFINITY).unwrap_or(f32::INFINITY)
+                })
+                .collect::<Vec<f32>>()
+        };
         // The largest distance of LOD 0's vertices from a build under the reference poses (0
         // without them).
         let reference_score = |from: &Step, indices: &[u32]| -> f32 {
@@ -548,15 +560,7 @@ fn build_lods_timed(
             }
             // The step's own build measured in full: its distance under every pose (test, then
             // reference), which also says in which pose the posed repair build starts.
-            let own_posed: Vec<f32> = step_posed
-                .iter()
-                .zip(&posed_points)
-                .chain(step_reference.iter().zip(&reference_points))
-                .map(|(positions, points)| {
-                    lost_below(positions, &best.0.indices, points, f32::INFINITY)
-                        .unwrap_or(f32::INFINITY)
-                })
-                .collect();
+            let own_posed = pose_distances(&step_posed, &step_reference, &best.0.indices);
             let (own_test, own_reference) = own_posed.split_at(step_posed.len());
             // `score` and `reference_score` of the step's own build, from those.
             let Some(rest) = with_points(&best.1, &base_dense, f32::INFINITY) else {
@@ -567,14 +571,7 @@ fn build_lods_timed(
                 return best;
             }
             let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
-            // The pose where the own build is farthest (the first of equals).
-            let worst_pose = own_posed.iter().enumerate().fold(
-                None,
-                |w: Option<(usize, f32)>, (k, &d)| match w {
-                    Some((_, wd)) if wd >= d => w,
-                    _ => Some((k, d)),
-                },
-            );
+            let worst_pose = farthest_pose(&own_posed);
             for (i, plain) in plains.iter().enumerate() {
                 let other = plain.run(target, plain_budget, keep);
                 if other.indices.len() > most {
@@ -608,19 +605,9 @@ fn build_lods_timed(
             };
             let worst_pose = match best.2 {
                 None => worst_pose,
-                Some(_) => from_posed
-                    .iter()
-                    .zip(&posed_points)
-                    .chain(from_reference.iter().zip(&reference_points))
-                    .map(|(positions, points)| {
-                        lost_below(positions, &best.0.indices, points, f32::INFINITY)
-                            .unwrap_or(f32::INFINITY)
-                    })
-                    .enumerate()
-                    .fold(None, |w: Option<(usize, f32)>, (k, d)| match w {
-                        Some((_, wd)) if wd >= d => w,
-                        _ => Some((k, d)),
-                    }),
+                Some(_) => {
+                    farthest_pose(&pose_distances(from_posed, from_reference, &best.0.indices))
+                }
             };
             if let Some((k, farthest)) = worst_pose {
                 let base = base_posed.iter().chain(&base_reference).nth(k);
@@ -749,6 +736,17 @@ fn build_lods_timed(
         started = now;
     }
     Ok(chain)
+}
+
+/// The pose of the largest distance in `distances` (the first of equals) and that distance.
+fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
+    distances
+        .iter()
+        .enumerate()
+        .fold(None, |w, (k, &d)| match w {
+            Some((_, wd)) if wd >= d => w,
+            _ => Some((k, d)),
+        })
 }
 
 /// What [`generate_lods`] did to each mesh.

@@ -79,3 +79,30 @@ fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
     ];
     assert_eq!(vertex_flags(&lod, &submesh_of(&lod), true, false), expected);
 }
+
+/// The posed repair build's locks: LOD 0's vertices at least half as far from the build as the
+/// farthest, in that pose, given by their rest positions, farthest first.
+#[test]
+fn posed_far_vertices_are_the_far_ones_in_that_pose_by_their_rest_positions() {
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let rest = vec![
+        p(0.0, 0.0, 0.0),
+        p(1.0, 0.0, 0.0),
+        p(1.0, 1.0, 0.0),
+        p(0.0, 1.0, 0.0),
+        p(0.5, 0.5, 0.0),
+        p(0.25, 0.5, 0.0),
+    ];
+    // In the pose, vertex 4 rises by 1 and vertex 5 by 0.6; the build (the quad without them)
+    // stays flat.
+    let mut posed = rest.clone();
+    posed[4].z = 1.0;
+    posed[5].z = 0.6;
+    let used = [0u32, 1, 2, 3, 4, 5];
+    let build = [0u32, 1, 2, 0, 2, 3];
+    let far = measure::posed_far_vertices(&rest, &used, (&posed, &posed), &build, 1.0);
+    assert_eq!(far, vec![rest[4], rest[5]]);
+    // Only what is more than half the farthest distance away.
+    let far = measure::posed_far_vertices(&rest, &used, (&posed, &posed), &build, 1.5);
+    assert_eq!(far, vec![rest[4]]);
+}

@@ -13,7 +13,9 @@
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods, generate_lods_tuned, LodOptions, LodTuning};
+use sinew_pipeline::lod::{
+    generate_lods, generate_lods_tuned, reference_poses, LodOptions, LodTuning,
+};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::*;
 use std::collections::HashMap;
@@ -558,4 +560,31 @@ fn light_reductions_at_least_as_close_as_gltfpack_at_rest() {
             "{file}: {tris} triangles: rest {r:.3}% vs gltfpack {rest}%"
         );
     }
+}
+
+/// `--effort max`'s reference poses: at most 16 in all, the same number from each clip (16 / 3 = 5
+/// for Fox's three), each clip sampled by the runtime's sampler at the middles of equal parts of
+/// its duration.
+#[test]
+fn reference_poses_sample_each_clip_at_the_middles_of_equal_parts() {
+    let Some(scene) = load("gltf/Fox.glb") else {
+        return;
+    };
+    let skeleton = scene.skeleton.as_ref().unwrap();
+    assert_eq!(scene.clips.len(), 3);
+    let poses = reference_poses(&scene.clips, skeleton);
+    assert_eq!(poses.len(), 15);
+    for (c, k) in [(0usize, 0usize), (1, 1), (2, 4)] {
+        let clip = scene.clips[c].to_clip().unwrap();
+        let binding = ClipBinding::new(&clip, skeleton);
+        let mut locals = skeleton.bind_local().to_vec();
+        let at = clip.duration() * (k as f32 + 0.5) / 5.0;
+        Sampler::new()
+            .sample(&clip, &binding, skeleton, at, &mut locals)
+            .unwrap();
+        assert_eq!(poses[5 * c + k], locals, "clip {c}, pose {k}");
+    }
+    let one = reference_poses(&scene.clips[..1], skeleton);
+    assert_eq!(one.len(), 8);
+    assert_ne!(one[0], one[7]);
 }

@@ -504,14 +504,16 @@ fn build_lods_timed(
         // poses, model units;
         // `None` as soon as it is known to be at least `limit`. `from`: the step the build's
         // indices refer to.
+        // A step's source under the test poses and under the reference poses: the step's own,
+        // then the plain builds'.
+        let sources_posed = [
+            (&step_posed, &step_reference),
+            (&plain_posed, &plain_reference),
+        ];
+        let posed_of = |from: &Step| sources_posed[usize::from(from.is_plain())];
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = 0.0f32;
-            let posed = if from.is_plain() {
-                &plain_posed
-            } else {
-                &step_posed
-            };
-            for (positions, points) in posed.iter().zip(&posed_points) {
+            for (positions, points) in posed_of(from).0.iter().zip(&posed_points) {
                 worst = worst.max(lost_below(positions, indices, points, limit)?);
             }
             worst = worst.max(with_points(m, &base_dense, limit)?);
@@ -532,17 +534,8 @@ fn build_lods_timed(
         // The largest distance of LOD 0's vertices from a build under the reference poses (0
         // without them).
         let reference_score = |from: &Step, indices: &[u32]| -> f32 {
-            let posed = if from.is_plain() {
-                &plain_reference
-            } else {
-                &step_reference
-            };
-            posed
-                .iter()
-                .zip(&reference_points)
-                .map(|(positions, points)| {
-                    lost_below(positions, indices, points, f32::INFINITY).unwrap_or(f32::INFINITY)
-                })
+            pose_distances(&[], posed_of(from).1, indices)
+                .into_iter()
                 .fold(0.0, f32::max)
         };
         // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
@@ -599,10 +592,11 @@ fn build_lods_timed(
             // where it is farthest (test or reference) are locked, each with a triangle around
             // it, and that build is made again; kept on the same terms as a plain build.
             // Which step the best build came from, and that step's source under the poses.
-            let (from, from_posed, from_reference) = match best.2 {
-                None => (&step, &step_posed, &step_reference),
-                Some(i) => (&plains[i], &plain_posed, &plain_reference),
+            let from = match best.2 {
+                None => &step,
+                Some(i) => &plains[i],
             };
+            let (from_posed, from_reference) = posed_of(from);
             let worst_pose = match best.2 {
                 None => worst_pose,
                 Some(_) => {

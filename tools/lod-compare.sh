@@ -9,7 +9,8 @@
 # turns them into the tables of docs/lod.md.
 #
 # usage: GLTFPACK=/path/to/gltfpack [PLAIN=1] tools/lod-compare.sh OUT.jsonl [FILE ...]
-#   (PLAIN=1: sinew's chains with the plain builds of `convert --effort max`)
+#   (PLAIN=1: sinew's chains with the plain builds of `convert --effort max`; PLAIN_WORK=N: with
+#   them on the meshes whose plain work is at most N instead of the default bound)
 #   (default files: the corpus meshes and fixtures of docs/lod.md; GLTFPACK defaults to the
 #   peers' build, /work/peers/gltfpack-build/gltfpack)
 set -euo pipefail
@@ -44,6 +45,7 @@ for input in "$@"; do
 done
 plain=()
 if [ -n "${PLAIN:-}" ]; then plain=(--plain); fi
+if [ -n "${PLAIN_WORK:-}" ]; then plain+=(--plain-work "$PLAIN_WORK"); fi
 "$root/target/release/examples/lod_peers" --gltfpack "$gltfpack" "${plain[@]}" \
   --pose-at 0.125 --pose-at 0.25 --pose-at 0.5 --pose-at 0.75 "${inputs[@]}" > "$out"
 echo "wrote $out ($(wc -l < "$out") rows)"

@@ -520,8 +520,8 @@ pub fn mesh_lods(
         Some(o) => {
             // The plain builds are also compared under poses of the scene's own clips.
             let reference = match skeleton {
-                Some(s) if tuning.plain_candidate => sinew_pipeline::lod::reference_poses(clips, s),
-                _ => Vec::new(),
+                Some(s) => sinew_pipeline::lod::reference_poses(clips, s),
+                None => Vec::new(),
             };
             let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
                 meshes, skeleton, o, tuning, &reference,

@@ -14,7 +14,8 @@ use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{
-    generate_lods, generate_lods_tuned, reference_poses, LodOptions, LodTuning,
+    generate_lods, generate_lods_tuned, plain_work, reference_poses, LodOptions, LodTuning,
+    PLAIN_WORK_BOUND,
 };
 use sinew_scene::Scene;
 use sinew_testdata::geometry::*;
@@ -321,9 +322,14 @@ fn plain_chain_at(scene: &Scene, counts: &[usize]) -> Scene {
 /// The first mesh's LOD built with the plain builds at `tris` triangles: its triangles and its
 /// distance to LOD 0 at rest, % of the diagonal.
 fn plain_rest_at(scene: &Scene, tris: usize) -> (usize, f32) {
-    let base = &scene.meshes[0].geometry;
-    let matched = plain_chain_at(scene, &[tris]);
-    let lod = &matched.meshes[0].lods[0].lod;
+    rest_at(&plain_chain_at(scene, &[tris]))
+}
+
+/// The first mesh's first generated LOD: its triangles and its distance to LOD 0 at rest, % of the
+/// diagonal.
+fn rest_at(built: &Scene) -> (usize, f32) {
+    let base = &built.meshes[0].geometry;
+    let lod = &built.meshes[0].lods[0].lod;
     let d = hausdorff(&base.positions, &base.indices, &lod.positions, &lod.indices);
     (lod.triangle_count(), d / diagonal(&base.positions) * 100.0)
 }
@@ -556,6 +562,64 @@ fn light_reductions_at_least_as_close_as_gltfpack_at_rest() {
             "{file}: {tris} triangles: rest {r:.3}% vs gltfpack {rest}%"
         );
     }
+}
+
+/// The default builds small meshes the plain ways too (`LodTuning::plain_work_bound`): where the
+/// work is within the bound the default chain is as close as gltfpack at its counts (the peers'
+/// build, `-si 0.5 -kn -noq`, or `-sa` for spider's tooth, at rest, % of the diagonal; without the
+/// plain builds 0.399, 0.390, 1.435 and 3.946), and above it the chain is the one without them.
+#[test]
+fn default_builds_small_meshes_the_plain_ways_too() {
+    let within: [(&str, Option<&str>, usize, f32); 4] = [
+        ("gltf/RiggedSimple.glb", None, 94, 0.364),
+        ("smd/holy_grailref.smd", None, 852, 0.319),
+        ("obj/regr01.obj", Some("Raft-l-01"), 76, 1.080),
+        ("obj/spider.obj", Some("Zahn"), 24, 2.850),
+    ];
+    for (file, mesh, tris, rest) in within {
+        let Some(mut scene) = load(file) else {
+            return;
+        };
+        if let Some(name) = mesh {
+            scene.meshes.retain(|m| m.name == name);
+        }
+        assert_eq!(scene.meshes.len(), 1, "{file}");
+        let skeleton = scene.skeleton.as_ref();
+        let reference = match skeleton {
+            Some(s) => reference_poses(&scene.clips, s),
+            None => Vec::new(),
+        };
+        let work = plain_work(&scene.meshes[0].geometry, skeleton, &reference);
+        assert!(work <= PLAIN_WORK_BOUND, "{file}: work {work}");
+        let (reached, r) = rest_at(&chain_at(&scene, &[tris]));
+        assert!(reached <= tris, "{file}: {reached}");
+        assert!(
+            r <= rest + 0.001,
+            "{file}: {tris} triangles: rest {r:.3}% vs gltfpack {rest}%"
+        );
+    }
+    // spot: 5,856 triangles, static: 46,848 units of work.
+    let Some(scene) = load("obj/spot.obj") else {
+        return;
+    };
+    let work = plain_work(&scene.meshes[0].geometry, None, &[]);
+    assert_eq!(work, 5_856 * 8);
+    let without = LodTuning {
+        plain_work_bound: 0,
+        ..LodTuning::default()
+    };
+    let (a, b) = (
+        chain_at(&scene, &[2928]),
+        chain_tuned_at(&scene, &[2928], &without),
+    );
+    assert_eq!(a.meshes[0].lods[0].lod, b.meshes[0].lods[0].lod);
+    // The bound raised past spot's work, its plain builds are kept (closer: 0.298% without).
+    let above = LodTuning {
+        plain_work_bound: work,
+        ..LodTuning::default()
+    };
+    let (_, r) = rest_at(&chain_tuned_at(&scene, &[2928], &above));
+    assert!(r <= 0.276 + 0.001, "spot: {r:.3}%");
 }
 
 /// `--effort max`'s reference poses: at most 16 in all, the same number from each clip (16 / 3 = 5

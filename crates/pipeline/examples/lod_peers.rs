@@ -2,8 +2,10 @@
 //! (docs/lod.md, "Against gltfpack at equal triangle counts"; driven by tools/lod-compare.sh).
 //!
 //! `cargo run --release -p sinew-pipeline --example lod_peers -- --gltfpack PATH [--pose-at F]...
-//! [--min-triangles N] [--plain] FILE.glb|FILE.gltf...` (`--plain`: with the plain builds of
-//! `convert --effort max`, `LodTuning::plain_candidate`)
+//! [--min-triangles N] [--plain] [--plain-work N] FILE.glb|FILE.gltf...` (`--plain`: with the
+//! plain builds of `convert --effort max` on every mesh, `LodTuning::plain_candidate`;
+//! `--plain-work N`: on the meshes whose `lod::plain_work` is at most N, default
+//! `lod::PLAIN_WORK_BOUND`)
 //!
 //! For each glTF file (other formats: export them first with `sinew export FILE -o FILE.glb`, which
 //! is then the reference for both tools) and each of its meshes of at least N triangles (default
@@ -28,7 +30,9 @@ mod lod_common;
 use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods_tuned, LodOptions, LodTuning};
+use sinew_pipeline::lod::{
+    generate_lods_tuned, plain_work, reference_poses, LodOptions, LodTuning,
+};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::{Path, PathBuf};
@@ -128,6 +132,9 @@ fn main() {
             "--pose-at" => ats.push(args.remove(0).parse::<f32>().expect("--pose-at F")),
             "--min-triangles" => min_tris = args.remove(0).parse().expect("--min-triangles N"),
             "--plain" => tuning.plain_candidate = true,
+            "--plain-work" => {
+                tuning.plain_work_bound = args.remove(0).parse().expect("--plain-work N")
+            }
             _ => files.push(PathBuf::from(a)),
         }
     }
@@ -191,10 +198,15 @@ fn main() {
             };
             let mname = mesh.name.replace('"', "'");
             let sinew_one = only(&s, mi);
+            let reference = match &scene.skeleton {
+                Some(sk) => reference_poses(&scene.clips, sk),
+                None => Vec::new(),
+            };
+            let work = plain_work(&mesh.geometry, scene.skeleton.as_ref(), &reference);
             for k in 0..sinew_one.meshes[0].lods.len() {
                 let (rest, posed) = r.measure(&sinew_one, Some(k), true);
                 println!(
-                    "{{\"file\":\"{name}\",\"mesh\":\"{mname}\",\"base\":{base},\"tool\":\"sinew\",\"level\":{},\"triangles\":{},\"error\":{},\"rest\":{},\"posed\":{}}}",
+                    "{{\"file\":\"{name}\",\"mesh\":\"{mname}\",\"base\":{base},\"tool\":\"sinew\",\"plain_work\":{work},\"level\":{},\"triangles\":{},\"error\":{},\"rest\":{},\"posed\":{}}}",
                     k + 1,
                     sinew_one.meshes[0].lods[k].lod.triangle_count(),
                     json_f(sinew_one.meshes[0].lods[k].error_relative),

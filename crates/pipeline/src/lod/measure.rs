@@ -75,15 +75,18 @@ pub(super) fn measure_below(
 }
 
 /// The distance of LOD 0's farthest point of `base_points` from the triangles `indices` (into
-/// `positions`); `None` as soon as it is known to be at least `limit`.
+/// `positions`) as far as it is above `floor` (otherwise `floor`: a maximum over several poses
+/// passes the largest so far, and most points then stop at their first triangle); `None` as soon
+/// as it is known to be at least `limit`.
 pub(super) fn lost_below(
     positions: &[Vec3],
     indices: &[u32],
     base_points: &[Vec3],
+    floor: f32,
     limit: f32,
 ) -> Option<f32> {
     let grid = TriangleGrid::new(positions, indices);
-    farthest(base_points, &grid, 0.0, limit)
+    farthest(base_points, &grid, floor, limit)
 }
 
 /// The distance of `m`'s build to LOD 0 with `extra` points of LOD 0 (its centroids and edge

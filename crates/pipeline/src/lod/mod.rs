@@ -54,8 +54,8 @@ use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{ClipBinding, Lod, Sampler, Skeleton, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene, SceneClip};
-pub use step::LodTuning;
-use step::{first_use_remap, optimize_ranges, Anchors, Plain, Step};
+use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Plain, Step};
+pub use step::{LodTuning, PLAIN_WORK_BOUND};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
 
 /// A LOD's reported error is at least its measured distance to LOD 0 times this margin: the larger
@@ -281,9 +281,10 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
+    let plain = plain_builds(tuning, &mesh.geometry, skeleton, &[]);
     build_lods_timed(
         mesh,
-        &mesh.geometry,
+        plain.then_some(&mesh.geometry),
         skeleton,
         options,
         tuning,
@@ -297,7 +298,7 @@ pub fn build_lods_tuned(
 /// `seconds`.
 fn build_lods_timed(
     mesh: &Mesh,
-    input: &Lod,
+    plain_input: Option<&Lod>,
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
@@ -358,12 +359,12 @@ fn build_lods_timed(
         &mesh.geometry.positions,
         &mesh.geometry.indices,
     ));
-    // The plain build (`Step::plain`) of every level starts from LOD 0 in the order it came in,
-    // welded as each step's source is.
-    let plain_flat = is_flat_soup(input);
+    // The plain builds (`Step::plain`) of every level, when they run, start from LOD 0 in the
+    // order it came in (`plain_input`), welded as each step's source is.
+    let plain_flat = plain_input.is_some_and(is_flat_soup);
     // meshoptimizer squares the limit: the largest finite value stays finite.
     let plain_budget = options.max_error.unwrap_or(f32::MAX.sqrt());
-    let plain_source = if tuning.plain_candidate {
+    let plain_source = if let Some(input) = plain_input {
         let flat = plain_flat;
         let welded = match split_shared(input) {
             Some(split) => weld(&split, flat),
@@ -413,7 +414,7 @@ fn build_lods_timed(
     } else {
         Vec::new()
     };
-    let base_dense = if tuning.plain_candidate {
+    let base_dense = if plain_input.is_some() {
         // Centroids and edge midpoints (`sample_points` puts them first): the vertices are in
         // `base_points`.
         let g = &mesh.geometry;
@@ -514,22 +515,27 @@ fn build_lods_timed(
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = 0.0f32;
             for (positions, points) in posed_of(from).0.iter().zip(&posed_points) {
-                worst = worst.max(lost_below(positions, indices, points, limit)?);
+                worst = lost_below(positions, indices, points, worst, limit)?;
             }
             worst = worst.max(with_points(m, &base_dense, limit)?);
             (worst < limit).then_some(worst)
         };
         // The distance of LOD 0's vertices from a build (`indices` into a source under the test
-        // poses, `posed`, and the reference poses, `reference`) under each pose, test poses first.
+        // poses, `posed`, and the reference poses, `reference`) under each pose, test poses first;
+        // where a pose is no farther than an earlier one of its kind (test or reference), the
+        // largest distance so far instead (measured only until known: the largest of each kind and
+        // the first pose that reaches it are those of the exact distances).
         let pose_distances = |posed: &[Vec<Vec3>], reference: &[Vec<Vec3>], indices: &[u32]| {
-            posed
-                .iter()
-                .zip(&posed_points)
-                .chain(reference.iter().zip(&reference_points))
-                .map(|(positions, points)| {
-                    lost_below(positions, indices, points, f32::INFINITY).unwrap_or(f32::INFINITY)
-                })
-                .collect::<Vec<f32>>()
+            let mut out = Vec::with_capacity(posed.len() + reference.len());
+            for (kind, points) in [(posed, &posed_points), (reference, &reference_points)] {
+                let mut floor = 0.0f32;
+                for (positions, points) in kind.iter().zip(points) {
+                    floor = lost_below(positions, indices, points, floor, f32::INFINITY)
+                        .unwrap_or(f32::INFINITY);
+                    out.push(floor);
+                }
+            }
+            out
         };
         // The largest distance of LOD 0's vertices from a build under the reference poses (0
         // without them).
@@ -544,6 +550,10 @@ fn build_lods_timed(
         // `reference_score` (a veto, not part of `score`: one far pose of many must not outweigh
         // rest and the test poses); ties keep the earlier build. Also says which plain build was
         // kept, if any.
+        // Each plain build of this level, once: they read only `keep.hard` of the anchors (the
+        // retry with UV seams open below differs in nothing else), so the retry reuses them.
+        let plain_built: Vec<std::cell::OnceCell<Candidate>> =
+            plains.iter().map(|_| std::cell::OnceCell::new()).collect();
         let build = |keep: &Anchors| {
             let (built, m) = build_current(keep);
             let most = built.indices.len().max(3 * (target + slack));
@@ -565,8 +575,10 @@ fn build_lods_timed(
             }
             let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
             let worst_pose = farthest_pose(&own_posed);
-            for (i, plain) in plains.iter().enumerate() {
-                let other = plain.run(target, plain_budget, keep);
+            for ((i, plain), once) in plains.iter().enumerate().zip(&plain_built) {
+                let other = once
+                    .get_or_init(|| plain.run(target, plain_budget, keep))
+                    .clone();
                 if other.indices.len() > most {
                     continue;
                 }
@@ -732,6 +744,36 @@ fn build_lods_timed(
     Ok(chain)
 }
 
+/// How much a mesh's plain builds cost, in LOD 0 triangles measured once: its triangles times
+/// [`PLAIN_REST_WORK`] (the builds themselves and their measurement at rest) plus one for each
+/// pose its builds are compared in (when it is skinned to `skeleton`: the two test poses and each
+/// of `reference`). What [`LodTuning::plain_work_bound`] bounds (docs/lod.md, "Cost").
+pub fn plain_work(lod: &Lod, skeleton: Option<&Skeleton>, reference: &[Vec<Transform>]) -> usize {
+    let poses = match skeleton {
+        Some(s) if lod.is_skinned() && !s.is_empty() => {
+            2 + reference.iter().filter(|l| l.len() == s.len()).count()
+        }
+        _ => 0,
+    };
+    lod.triangle_count().saturating_mul(PLAIN_REST_WORK + poses)
+}
+
+/// The plain builds' work at rest in poses' worth ([`plain_work`]): measured, a static mesh's
+/// plain builds cost about as much as a skinned one's comparison under eight poses (docs/lod.md,
+/// "Cost").
+const PLAIN_REST_WORK: usize = 8;
+
+/// Whether a mesh's LOD steps are also built the plain ways ([`LodTuning::plain_candidate`], or
+/// its [`plain_work`] within [`LodTuning::plain_work_bound`]).
+fn plain_builds(
+    tuning: &LodTuning,
+    lod: &Lod,
+    skeleton: Option<&Skeleton>,
+    reference: &[Vec<Transform>],
+) -> bool {
+    tuning.plain_candidate || plain_work(lod, skeleton, reference) <= tuning.plain_work_bound
+}
+
 /// The pose of the largest distance in `distances` (the first of equals) and that distance.
 fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
     distances
@@ -771,9 +813,9 @@ pub fn generate_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    let reference = match (&scene.skeleton, tuning.plain_candidate) {
-        (Some(s), true) => reference_poses(&scene.clips, s),
-        _ => Vec::new(),
+    let reference = match &scene.skeleton {
+        Some(s) => reference_poses(&scene.clips, s),
+        None => Vec::new(),
     };
     let Scene {
         meshes, skeleton, ..
@@ -853,16 +895,16 @@ pub fn generate_mesh_lods_timed(
     let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
         let started = std::time::Instant::now();
         // The geometry as it came, before the vertex-cache order: the plain build starts from it.
-        let input = tuning.plain_candidate.then(|| mesh.geometry.clone());
+        let plain = plain_builds(tuning, &mesh.geometry, skeleton, reference);
+        let plain_input = plain.then(|| mesh.geometry.clone());
         optimize_base(mesh)?;
         let mut times = MeshLodTimes {
             optimize: started.elapsed().as_secs_f64(),
             levels: Vec::new(),
         };
-        let input = input.as_ref().unwrap_or(&mesh.geometry);
         let chain = build_lods_timed(
             mesh,
-            input,
+            plain_input.as_ref(),
             skeleton,
             options,
             tuning,

@@ -45,9 +45,14 @@ pub struct LodTuning {
     pub whole_mesh: bool,
     /// Build each step a second way, as gltfpack does (normals alone weigh, no vertex flags,
     /// `Prune`, full `Regularize` when skinned), and keep that build when it is closer to LOD 0 at
-    /// rest and under the test poses (the larger distance) with no more triangles. Off by default:
-    /// with the posed repair build it costs 4.0-5.3x the chain's work (docs/lod.md); `convert --effort max` turns it on.
+    /// rest and under the test poses (the larger distance) with no more triangles, on every mesh.
+    /// With the posed repair build it costs 4.0-5.3x the chain's work (docs/lod.md); `convert
+    /// --effort max` turns it on.
     pub plain_candidate: bool,
+    /// Without `plain_candidate`, the plain builds still run on a mesh whose comparison work
+    /// ([`super::plain_work`]) is at most this: where they cost little in absolute terms
+    /// (docs/lod.md, "Cost"). 0: never.
+    pub plain_work_bound: usize,
 }
 
 impl Default for LodTuning {
@@ -63,6 +68,7 @@ impl Default for LodTuning {
             repair_far_vertices: true,
             whole_mesh: true,
             plain_candidate: false,
+            plain_work_bound: PLAIN_WORK_BOUND,
         }
     }
 }
@@ -76,6 +82,9 @@ pub(super) struct Anchors {
     pub(super) soft: Vec<[u32; 3]>,
     pub(super) open_uv_seams: bool,
 }
+
+/// The default [`LodTuning::plain_work_bound`], in LOD 0 triangles measured (docs/lod.md, "Cost").
+pub const PLAIN_WORK_BOUND: usize = 10_000;
 
 /// Per-vertex attributes the simplifier weighs: normal (3), UV (2), displacement under two test poses (6).
 const ATTRIBUTE_COUNT: usize = 11;
@@ -336,6 +345,7 @@ pub(super) fn optimize_ranges(indices: &mut [u32], submeshes: &[Submesh], vertex
 
 /// A simplification step's result: `indices` into the step's source, grouped by material range
 /// (`submeshes`, empty when the source has none), and meshoptimizer's relative error.
+#[derive(Clone)]
 pub(super) struct Candidate {
     pub(super) indices: Vec<u32>,
     pub(super) submeshes: Vec<Submesh>,

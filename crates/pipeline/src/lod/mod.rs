@@ -26,7 +26,9 @@
 //! - `Priority` on the extreme vertices of every connected part, whatever its size (`lod_parts`);
 //! - a repair build: LOD 0's farthest vertices from the step's result are locked, each with one
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
-//! - with `LodTuning::plain_candidate` (`convert --effort max`), three plain builds of the same
+//! - on a mesh whose plain builds cost little ([`plain_work`] within
+//!   `LodTuning::plain_work_bound`), and on every mesh with `LodTuning::plain_candidate`
+//!   (`convert --effort max`), three plain builds of the same
 //!   target from LOD 0 as it came in (gltfpack's `-si` way, on positions alone, and gltfpack's
 //!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and

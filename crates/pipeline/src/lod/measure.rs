@@ -4,6 +4,7 @@
 
 use crate::lod_parts::position_ids;
 use crate::surface::{sample_points, TriangleGrid};
+use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::Lod;
 
@@ -31,9 +32,32 @@ impl Measured {
 /// The largest distance from `points` to `grid`'s triangles, as far as it is above `floor`
 /// (otherwise `floor` or less); `None` as soon as one is at least `limit`. A sparse pass first
 /// raises the running maximum, so that most points stop at their first triangle.
+///
+/// Past [`FARTHEST_CHUNK`] points the full pass runs in chunks on rayon, each from the sparse
+/// pass's maximum: the result is the exact maximum either way (or `floor`), so it does not depend
+/// on the chunks or the thread count, and a LOD chain on the critical path of a convert can use a
+/// core the clip encoder has left.
 fn farthest(points: &[Vec3], grid: &TriangleGrid, floor: f32, limit: f32) -> Option<f32> {
+    let m = running_max(grid, floor, limit, points.iter().step_by(61))?;
+    if points.len() <= FARTHEST_CHUNK {
+        return running_max(grid, m, limit, points.iter());
+    }
+    let chunks: Option<Vec<f32>> = points
+        .par_chunks(FARTHEST_CHUNK)
+        .map(|chunk| running_max(grid, m, limit, chunk.iter()))
+        .collect();
+    chunks.map(|c| c.into_iter().fold(m, f32::max))
+}
+
+/// [`farthest`] over `points` from `floor`, in their order.
+fn running_max<'p>(
+    grid: &TriangleGrid,
+    floor: f32,
+    limit: f32,
+    points: impl Iterator<Item = &'p Vec3>,
+) -> Option<f32> {
     let mut m = floor;
-    for &p in points.iter().step_by(61).chain(points) {
+    for &p in points {
         m = m.max(grid.distance_above(p, m));
         if m >= limit {
             return None;
@@ -41,6 +65,9 @@ fn farthest(points: &[Vec3], grid: &TriangleGrid, floor: f32, limit: f32) -> Opt
     }
     Some(m)
 }
+
+/// Points per parallel chunk of [`farthest`].
+const FARTHEST_CHUNK: usize = 1024;
 
 /// Measures the triangles `indices` (into `positions`) against LOD 0, given as its distinct
 /// vertex positions and its grid: exact where it matters (see [`Measured`]).

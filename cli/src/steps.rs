@@ -518,15 +518,12 @@ pub fn mesh_lods(
             Ok(Vec::new())
         }
         Some(o) => {
-            // The plain builds are also compared under poses of the scene's own clips.
-            let reference = match skeleton {
-                Some(s) => sinew_pipeline::lod::reference_poses(clips, s),
-                None => Vec::new(),
-            };
-            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
-                meshes, skeleton, o, tuning, &reference,
-            )
-            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            // The plain builds are also compared under poses of the scene's own clips, and the
+            // clips' size sets how many meshes have them.
+            let motion = sinew_pipeline::lod::scene_motion(clips, skeleton);
+            let (_, times) =
+                sinew_pipeline::lod::generate_mesh_lods_timed(meshes, skeleton, o, tuning, &motion)
+                    .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
             Ok(times)
         }
     }

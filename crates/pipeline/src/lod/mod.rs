@@ -27,8 +27,9 @@
 //! - a repair build: LOD 0's farthest vertices from the step's result are locked, each with one
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
 //! - on a mesh whose plain builds cost little ([`plain_work`] within
-//!   `LodTuning::plain_work_bound`), and on every mesh with `LodTuning::plain_candidate`
-//!   (`convert --effort max`), three plain builds of the same
+//!   `LodTuning::plain_work_bound`, or within the share of a file's clips: [`SceneMotion`]), and
+//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), three plain
+//!   builds of the same
 //!   target from LOD 0 as it came in (gltfpack's `-si` way, on positions alone, and gltfpack's
 //!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
@@ -44,6 +45,7 @@
 //! meshoptimizer passes indices to C++ unchecked, so every buffer is validated before each call.
 
 mod measure;
+mod motion;
 mod step;
 mod weld;
 
@@ -52,10 +54,12 @@ use measure::{
     distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
     with_points, Measured,
 };
+pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, SceneMotion};
+use motion::{plain_builds, plain_builds_of};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
-use sinew_core::{ClipBinding, Lod, Sampler, Skeleton, Transform, MAX_INFLUENCES};
-use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene, SceneClip};
+use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
+use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Plain, Step};
 pub use step::{LodTuning, PLAIN_WORK_BOUND};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
@@ -746,36 +750,6 @@ fn build_lods_timed(
     Ok(chain)
 }
 
-/// How much a mesh's plain builds cost, in LOD 0 triangles measured once: its triangles times
-/// [`PLAIN_REST_WORK`] (the builds themselves and their measurement at rest) plus one for each
-/// pose its builds are compared in (when it is skinned to `skeleton`: the two test poses and each
-/// of `reference`). What [`LodTuning::plain_work_bound`] bounds (docs/lod.md, "Cost").
-pub fn plain_work(lod: &Lod, skeleton: Option<&Skeleton>, reference: &[Vec<Transform>]) -> usize {
-    let poses = match skeleton {
-        Some(s) if lod.is_skinned() && !s.is_empty() => {
-            2 + reference.iter().filter(|l| l.len() == s.len()).count()
-        }
-        _ => 0,
-    };
-    lod.triangle_count().saturating_mul(PLAIN_REST_WORK + poses)
-}
-
-/// The plain builds' work at rest in poses' worth ([`plain_work`]): measured, a static mesh's
-/// plain builds cost about as much as a skinned one's comparison under eight poses (docs/lod.md,
-/// "Cost").
-const PLAIN_REST_WORK: usize = 8;
-
-/// Whether a mesh's LOD steps are also built the plain ways ([`LodTuning::plain_candidate`], or
-/// its [`plain_work`] within [`LodTuning::plain_work_bound`]).
-fn plain_builds(
-    tuning: &LodTuning,
-    lod: &Lod,
-    skeleton: Option<&Skeleton>,
-    reference: &[Vec<Transform>],
-) -> bool {
-    tuning.plain_candidate || plain_work(lod, skeleton, reference) <= tuning.plain_work_bound
-}
-
 /// The pose of the largest distance in `distances` (the first of equals) and that distance.
 fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
     distances
@@ -815,63 +789,26 @@ pub fn generate_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    let reference = match &scene.skeleton {
-        Some(s) => reference_poses(&scene.clips, s),
-        None => Vec::new(),
-    };
+    let motion = scene_motion(&scene.clips, scene.skeleton.as_ref());
     let Scene {
         meshes, skeleton, ..
     } = scene;
-    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning, &reference)
-}
-
-/// Poses sampled from each clip, at most this many in all.
-const REFERENCE_POSES: usize = 16;
-/// Poses sampled from one clip, at most.
-const REFERENCE_POSES_PER_CLIP: usize = 8;
-
-/// The reference poses the plain builds are compared under besides the test poses
-/// ([`LodTuning::plain_candidate`]): each clip's local pose (the runtime's sampler) at the middle
-/// of each eighth of its duration, at most [`REFERENCE_POSES`] in all, the first clips' first
-/// (fewer per clip when there are more than two clips). A clip that does not bind gives none.
-pub fn reference_poses(clips: &[SceneClip], skeleton: &Skeleton) -> Vec<Vec<Transform>> {
-    let per_clip = (REFERENCE_POSES / clips.len().max(1)).clamp(1, REFERENCE_POSES_PER_CLIP);
-    let mut poses = Vec::new();
-    let mut sampler = Sampler::new();
-    for c in clips {
-        let Ok(clip) = c.to_clip() else {
-            continue;
-        };
-        let binding = ClipBinding::new(&clip, skeleton);
-        for k in 0..per_clip {
-            if poses.len() == REFERENCE_POSES {
-                return poses;
-            }
-            let at = clip.duration() * (k as f32 + 0.5) / per_clip as f32;
-            let mut locals = skeleton.bind_local().to_vec();
-            if sampler
-                .sample(&clip, &binding, skeleton, at, &mut locals)
-                .is_ok()
-            {
-                poses.push(locals);
-            }
-        }
-    }
-    poses
+    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning, &motion)
 }
 
 /// [`generate_lods_tuned`] on a scene's meshes alone, so that a caller can work on the scene's clips
-/// at the same time (`reference`: [`reference_poses`] of the scene's clips when
-/// `tuning.plain_candidate`, else ignored). Meshes are independent: they run in parallel (rayon),
-/// each with the same result as alone; the first failing mesh in mesh order gives the error.
+/// at the same time (`motion`: [`scene_motion`] of the scene's clips). Meshes are independent
+/// (but for which of them share the clips' budget for the plain builds, decided first in mesh
+/// order): they run in parallel (rayon), each with the same result as alone with the same
+/// decision; the first failing mesh in mesh order gives the error.
 pub fn generate_mesh_lods(
     meshes: &mut [Mesh],
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
-    reference: &[Vec<Transform>],
+    motion: &SceneMotion,
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    generate_mesh_lods_timed(meshes, skeleton, options, tuning, reference).map(|(r, _)| r)
+    generate_mesh_lods_timed(meshes, skeleton, options, tuning, motion).map(|(r, _)| r)
 }
 
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
@@ -891,42 +828,44 @@ pub fn generate_mesh_lods_timed(
     skeleton: Option<&Skeleton>,
     options: &LodOptions,
     tuning: &LodTuning,
-    reference: &[Vec<Transform>],
+    motion: &SceneMotion,
 ) -> Result<(Vec<MeshLodReport>, Vec<MeshLodTimes>), LodError> {
     options.validate()?;
-    let one = |mesh: &mut Mesh| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
-        let started = std::time::Instant::now();
-        // The geometry as it came, before the vertex-cache order: the plain build starts from it.
-        let plain = plain_builds(tuning, &mesh.geometry, skeleton, reference);
-        let plain_input = plain.then(|| mesh.geometry.clone());
-        optimize_base(mesh)?;
-        let mut times = MeshLodTimes {
-            optimize: started.elapsed().as_secs_f64(),
-            levels: Vec::new(),
+    let reference = &motion.poses;
+    let plains = plain_builds_of(meshes, skeleton, tuning, motion);
+    let one =
+        |(mesh, plain): (&mut Mesh, bool)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
+            let started = std::time::Instant::now();
+            // The geometry as it came, before the vertex-cache order: the plain build starts from it.
+            let plain_input = plain.then(|| mesh.geometry.clone());
+            optimize_base(mesh)?;
+            let mut times = MeshLodTimes {
+                optimize: started.elapsed().as_secs_f64(),
+                levels: Vec::new(),
+            };
+            let chain = build_lods_timed(
+                mesh,
+                plain_input.as_ref(),
+                skeleton,
+                options,
+                tuning,
+                reference,
+                &mut times.levels,
+            )?;
+            mesh.lods = chain.lods;
+            mesh.lods_not_built = chain.not_built;
+            let report = MeshLodReport {
+                mesh: mesh.name.clone(),
+                base_triangles: mesh.geometry.triangle_count(),
+                lods: mesh.lods.clone(),
+                not_built: mesh.lods_not_built.clone(),
+            };
+            Ok((report, times))
         };
-        let chain = build_lods_timed(
-            mesh,
-            plain_input.as_ref(),
-            skeleton,
-            options,
-            tuning,
-            reference,
-            &mut times.levels,
-        )?;
-        mesh.lods = chain.lods;
-        mesh.lods_not_built = chain.not_built;
-        let report = MeshLodReport {
-            mesh: mesh.name.clone(),
-            base_triangles: mesh.geometry.triangle_count(),
-            lods: mesh.lods.clone(),
-            not_built: mesh.lods_not_built.clone(),
-        };
-        Ok((report, times))
-    };
     let done: Vec<Result<(MeshLodReport, MeshLodTimes), LodError>> = if meshes.len() > 1 {
-        meshes.par_iter_mut().map(one).collect()
+        meshes.par_iter_mut().zip(plains).map(one).collect()
     } else {
-        meshes.iter_mut().map(one).collect()
+        meshes.iter_mut().zip(plains).map(one).collect()
     };
     let done: Vec<(MeshLodReport, MeshLodTimes)> = done.into_iter().collect::<Result<_, _>>()?;
     Ok(done.into_iter().unzip())

@@ -106,3 +106,102 @@ fn posed_far_vertices_are_the_far_ones_in_that_pose_by_their_rest_positions() {
     let far = measure::posed_far_vertices(&rest, &used, (&posed, &posed), &build, 1.5);
     assert_eq!(far, vec![rest[4]]);
 }
+
+/// A static mesh of `tris` triangles (a fan; only the count matters to the work).
+fn static_mesh(tris: usize) -> Mesh {
+    let positions = (0..tris + 2)
+        .map(|i| Vec3::new(i as f32, (i % 2) as f32, 0.0))
+        .collect();
+    let indices = (0..tris as u32).flat_map(|t| [0, t + 1, t + 2]).collect();
+    Mesh::unsplit(
+        "fan",
+        Lod {
+            positions,
+            indices,
+            ..Lod::default()
+        },
+    )
+}
+
+/// Meshes within the bound always have the plain builds; beyond it, in mesh order, while their
+/// work fits in the clips' share (one unit per two joint-keys); with the bound 0, none do.
+#[test]
+fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
+    // Static: 8 units per triangle. 1,250 triangles: 10,000 units, the bound itself.
+    let meshes: Vec<Mesh> = [1_250, 1_500, 2_000, 1_251, 100]
+        .into_iter()
+        .map(static_mesh)
+        .collect();
+    let works: Vec<usize> = meshes
+        .iter()
+        .map(|m| plain_work(&m.geometry, None, &[]))
+        .collect();
+    assert_eq!(works, [10_000, 12_000, 16_000, 10_008, 800]);
+    let tuning = LodTuning::default();
+    let with_keys = |joint_keys: usize| {
+        let motion = SceneMotion {
+            poses: Vec::new(),
+            joint_keys,
+        };
+        plain_builds_of(&meshes, None, &tuning, &motion)
+    };
+    assert_eq!(with_keys(0), [true, false, false, false, true]);
+    // A share of 12,000 units: the 1,500-triangle mesh takes all of it.
+    assert_eq!(with_keys(24_000), [true, true, false, false, true]);
+    // 22,015 units: 12,000, then 16,000 does not fit, 10,008 does.
+    assert_eq!(with_keys(44_030), [true, true, false, true, true]);
+    assert_eq!(with_keys(2 * 38_008), [true, true, true, true, true]);
+    let none = LodTuning {
+        plain_work_bound: 0,
+        ..LodTuning::default()
+    };
+    let motion = SceneMotion {
+        poses: Vec::new(),
+        joint_keys: 1_000_000,
+    };
+    assert_eq!(plain_builds_of(&meshes, None, &none, &motion), [false; 5]);
+    let every = LodTuning {
+        plain_candidate: true,
+        ..none
+    };
+    assert_eq!(
+        plain_builds_of(&meshes, None, &every, &SceneMotion::default()),
+        [true; 5]
+    );
+}
+
+/// A clip's joint-keys: per track, the most keys of its channels.
+#[test]
+fn clip_joint_keys_count_each_tracks_longest_channel() {
+    use sinew_core::glam::Quat;
+    use sinew_core::{Curve, TrackCurves};
+    use sinew_scene::SceneClip;
+    let curve = |n: usize| Curve {
+        times: (0..n).map(|i| i as f32).collect(),
+        values: vec![Vec3::ZERO; n],
+    };
+    let rotations = |n: usize| Curve {
+        times: (0..n).map(|i| i as f32).collect(),
+        values: vec![Quat::IDENTITY; n],
+    };
+    let clip = |tracks: Vec<TrackCurves>| SceneClip {
+        name: "c".into(),
+        duration: 10.0,
+        sample_rate: 1.0,
+        looping: false,
+        additive: false,
+        tracks,
+    };
+    let track = |t: usize, r: usize, s: usize| TrackCurves {
+        joint: "j".into(),
+        translation: curve(t),
+        rotation: rotations(r),
+        scale: curve(s),
+    };
+    let clips = [
+        clip(vec![track(3, 5, 0), track(0, 0, 2)]),
+        clip(vec![track(0, 4, 0)]),
+    ];
+    assert_eq!(clip_joint_keys(&clips), 5 + 2 + 4);
+    assert_eq!(clip_joint_keys(&[]), 0);
+}

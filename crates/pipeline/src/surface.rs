@@ -188,8 +188,27 @@ impl TriangleGrid {
     /// (the search stops at the first triangle that close). What a maximum over many points needs:
     /// most points lie near the surface and stop at their first triangle.
     pub fn distance_above(&self, p: Vec3, floor: f32) -> f32 {
+        self.nearest_above(p, floor, u32::MAX).0
+    }
+
+    /// [`TriangleGrid::distance_above`] that measures triangle `hint` first (an index into the
+    /// triangles given; any other value: none), and also returns the triangle of the distance it
+    /// returns (`u32::MAX` without triangles). A good hint (the nearest triangle of a nearby
+    /// point, or of the same point under another pose of the same triangles) ends the search at
+    /// once when it is within `floor`, and otherwise bounds it from the start; the distance
+    /// returned is the same with any hint where it is above `floor`.
+    pub fn nearest_above(&self, p: Vec3, floor: f32, hint: u32) -> (f32, u32) {
         if self.tris.is_empty() {
-            return f32::INFINITY;
+            return (f32::INFINITY, u32::MAX);
+        }
+        let mut best = f32::INFINITY;
+        let mut nearest = u32::MAX;
+        if let Some(t) = self.tris.get(hint as usize) {
+            best = point_triangle_distance(p, t[0], t[1], t[2]);
+            nearest = hint;
+            if best <= floor {
+                return (best, nearest);
+            }
         }
         let hi = self.lo
             + Vec3::new(
@@ -201,26 +220,29 @@ impl TriangleGrid {
         let outside = (self.lo - p).max(p - hi).max(Vec3::ZERO).length();
         let c = self.coord(p);
         let max_r = self.dims.iter().copied().max().unwrap_or(1);
-        let mut best = f32::INFINITY;
         // The triangles of one cell (those whose box is nearer than the best so far); true when
         // the search may stop (a triangle within `floor`).
-        let visit = |x: i32, y: i32, z: i32, best: &mut f32| -> bool {
+        let visit = |x: i32, y: i32, z: i32, best: &mut (f32, u32)| -> bool {
             let cell = self.flat([x, y, z]);
             let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
             for &t in &self.entries[s..e] {
                 let (lo, hi) = self.boxes[t as usize];
                 // The triangle's box is a cheap lower bound of its distance.
-                if (lo - p).max(p - hi).max(Vec3::ZERO).length_squared() >= *best * *best {
+                if (lo - p).max(p - hi).max(Vec3::ZERO).length_squared() >= best.0 * best.0 {
                     continue;
                 }
-                let t = &self.tris[t as usize];
-                *best = best.min(point_triangle_distance(p, t[0], t[1], t[2]));
-                if *best <= floor {
+                let tri = &self.tris[t as usize];
+                let d = point_triangle_distance(p, tri[0], tri[1], tri[2]);
+                if d < best.0 {
+                    *best = (d, t);
+                }
+                if best.0 <= floor {
                     return true;
                 }
             }
             false
         };
+        let mut best = (best, nearest);
         for r in 0..=max_r {
             for z in (c[2] - r).max(0)..=(c[2] + r).min(self.dims[2] - 1) {
                 for y in (c[1] - r).max(0)..=(c[1] + r).min(self.dims[1] - 1) {
@@ -244,7 +266,7 @@ impl TriangleGrid {
             }
             // Every cell not searched yet is at least r cells from p's cell.
             let reach = r as f32 * self.cell;
-            if best <= (outside * outside + reach * reach).sqrt() {
+            if best.0 <= (outside * outside + reach * reach).sqrt() {
                 break;
             }
         }
@@ -415,9 +437,33 @@ mod tests {
             s ^= s << 5;
             (s % 10_000) as f32 / 10_000.0
         };
-        for _ in 0..300 {
+        let ntris = idx.len() as u32 / 3;
+        for n in 0..300u32 {
             let q = Vec3::new(rnd() * 20.0 - 4.0, rnd() * 6.0 - 3.0, rnd() * 20.0 - 4.0);
             assert_eq!(grid.distance(q), scan(q), "{q}");
+            // Any hint (a triangle, or none past the end) gives the exact distance above the
+            // floor and names the triangle at that distance; within the floor, the hint when it
+            // is within it.
+            let hint = (n * 37) % (ntris + 5);
+            let (d, t) = grid.nearest_above(q, -1.0, hint);
+            assert_eq!(d, scan(q), "{q} hint {hint}");
+            let tri = &idx[3 * t as usize..3 * t as usize + 3];
+            let corner = |i: usize| p[tri[i] as usize];
+            assert_eq!(
+                point_triangle_distance(q, corner(0), corner(1), corner(2)),
+                d
+            );
+            if hint < ntris {
+                let h = &idx[3 * hint as usize..3 * hint as usize + 3];
+                let dh = point_triangle_distance(
+                    q,
+                    p[h[0] as usize],
+                    p[h[1] as usize],
+                    p[h[2] as usize],
+                );
+                assert_eq!(grid.nearest_above(q, dh, hint), (dh, hint));
+                assert!(grid.nearest_above(q, dh * 0.5, hint).0 <= dh);
+            }
         }
         // A mesh against itself: no distance; against a copy moved 0.5 up: 0.5 at most.
         // (Centroids lie on their triangle up to rounding.)

@@ -38,27 +38,59 @@ impl Measured {
 /// on the chunks or the thread count, and a LOD chain on the critical path of a convert can use a
 /// core the clip encoder has left.
 fn farthest(points: &[Vec3], grid: &TriangleGrid, floor: f32, limit: f32) -> Option<f32> {
-    let m = running_max(grid, floor, limit, points.iter().step_by(61))?;
-    if points.len() <= FARTHEST_CHUNK {
-        return running_max(grid, m, limit, points.iter());
-    }
-    let chunks: Option<Vec<f32>> = points
-        .par_chunks(FARTHEST_CHUNK)
-        .map(|chunk| running_max(grid, m, limit, chunk.iter()))
-        .collect();
-    chunks.map(|c| c.into_iter().fold(m, f32::max))
+    farthest_hinted(points, grid, floor, limit, &mut [])
 }
 
-/// [`farthest`] over `points` from `floor`, in their order.
-fn running_max<'p>(
+/// [`farthest`] with `hints`: per point, a triangle of `grid` to measure first, set to the
+/// triangle each point's search ended on (for the same points against the same triangles under
+/// another pose: most points stop at their hint). Any hints, or none (`hints` not one per
+/// point), give the same result.
+fn farthest_hinted(
+    points: &[Vec3],
     grid: &TriangleGrid,
     floor: f32,
     limit: f32,
-    points: impl Iterator<Item = &'p Vec3>,
+    hints: &mut [u32],
 ) -> Option<f32> {
+    let hinted = hints.len() == points.len();
+    let hints = if hinted { hints } else { &mut [] };
+    let m = running_max(grid, floor, limit, points, hints, 61)?;
+    if points.len() <= FARTHEST_CHUNK {
+        return running_max(grid, m, limit, points, hints, 1);
+    }
+    let chunks: Option<Vec<f32>> = if hinted {
+        points
+            .par_chunks(FARTHEST_CHUNK)
+            .zip(hints.par_chunks_mut(FARTHEST_CHUNK))
+            .map(|(chunk, h)| running_max(grid, m, limit, chunk, h, 1))
+            .collect()
+    } else {
+        points
+            .par_chunks(FARTHEST_CHUNK)
+            .map(|chunk| running_max(grid, m, limit, chunk, &mut [], 1))
+            .collect()
+    };
+    chunks.map(|c| c.into_iter().fold(m, f32::max))
+}
+
+/// [`farthest_hinted`] over every `step`-th point from `floor`, in order.
+fn running_max(
+    grid: &TriangleGrid,
+    floor: f32,
+    limit: f32,
+    points: &[Vec3],
+    hints: &mut [u32],
+    step: usize,
+) -> Option<f32> {
+    let hinted = hints.len() == points.len();
     let mut m = floor;
-    for &p in points {
-        m = m.max(grid.distance_above(p, m));
+    for i in (0..points.len()).step_by(step) {
+        let hint = if hinted { hints[i] } else { u32::MAX };
+        let (d, nearest) = grid.nearest_above(points[i], m, hint);
+        if hinted {
+            hints[i] = nearest;
+        }
+        m = m.max(d);
         if m >= limit {
             return None;
         }
@@ -105,15 +137,20 @@ pub(super) fn measure_below(
 /// `positions`) as far as it is above `floor` (otherwise `floor`: a maximum over several poses
 /// passes the largest so far, and most points then stop at their first triangle); `None` as soon
 /// as it is known to be at least `limit`.
+///
+/// `hints`: per point, the triangle of `indices` to measure it against first (resized to the
+/// points, new ones with none), set to where each point's search ended: the same buffer across
+/// the poses of one build makes most searches one triangle long.
 pub(super) fn lost_below(
     positions: &[Vec3],
     indices: &[u32],
     base_points: &[Vec3],
-    floor: f32,
-    limit: f32,
+    (floor, limit): (f32, f32),
+    hints: &mut Vec<u32>,
 ) -> Option<f32> {
     let grid = TriangleGrid::new(positions, indices);
-    farthest(base_points, &grid, floor, limit)
+    hints.resize(base_points.len(), u32::MAX);
+    farthest_hinted(base_points, &grid, floor, limit, hints)
 }
 
 /// The distance of `m`'s build to LOD 0 with `extra` points of LOD 0 (its centroids and edge

@@ -520,8 +520,9 @@ fn build_lods_timed(
         let posed_of = |from: &Step| sources_posed[usize::from(from.is_plain())];
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = 0.0f32;
+            let mut hints = Vec::new();
             for (positions, points) in posed_of(from).0.iter().zip(&posed_points) {
-                worst = lost_below(positions, indices, points, worst, limit)?;
+                worst = lost_below(positions, indices, points, (worst, limit), &mut hints)?;
             }
             worst = worst.max(with_points(m, &base_dense, limit)?);
             (worst < limit).then_some(worst)
@@ -533,10 +534,12 @@ fn build_lods_timed(
         // the first pose that reaches it are those of the exact distances).
         let pose_distances = |posed: &[Vec<Vec3>], reference: &[Vec<Vec3>], indices: &[u32]| {
             let mut out = Vec::with_capacity(posed.len() + reference.len());
+            let mut hints = Vec::new();
             for (kind, points) in [(posed, &posed_points), (reference, &reference_points)] {
                 let mut floor = 0.0f32;
                 for (positions, points) in kind.iter().zip(points) {
-                    floor = lost_below(positions, indices, points, floor, f32::INFINITY)
+                    let range = (floor, f32::INFINITY);
+                    floor = lost_below(positions, indices, points, range, &mut hints)
                         .unwrap_or(f32::INFINITY);
                     out.push(floor);
                 }

@@ -84,12 +84,16 @@ fn running_max(
 ) -> Option<f32> {
     let hinted = hints.len() == points.len();
     let mut m = floor;
+    // Without hints, the triangle the point before ended on: neighbouring points of a list (a
+    // triangle's centroid and midpoints, vertices in first-use order) are near each other.
+    let mut last = u32::MAX;
     for i in (0..points.len()).step_by(step) {
-        let hint = if hinted { hints[i] } else { u32::MAX };
+        let hint = if hinted { hints[i] } else { last };
         let (d, nearest) = grid.nearest_above(points[i], m, hint);
         if hinted {
             hints[i] = nearest;
         }
+        last = nearest;
         m = m.max(d);
         if m >= limit {
             return None;

@@ -88,7 +88,10 @@ fn running_max(
     // triangle's centroid and midpoints, vertices in first-use order) are near each other.
     let mut last = u32::MAX;
     for i in (0..points.len()).step_by(step) {
-        let hint = if hinted { hints[i] } else { last };
+        let hint = match hints.get(i) {
+            Some(&h) if hinted && h != u32::MAX => h,
+            _ => last,
+        };
         let (d, nearest) = grid.nearest_above(points[i], m, hint);
         if hinted {
             hints[i] = nearest;
@@ -173,11 +176,14 @@ pub(super) fn with_points(m: &Measured, extra: &[Vec3], limit: f32) -> Option<f3
 /// [`REPAIR_VERTICES`].
 pub(super) fn far_vertices(m: &Measured, base_points: &[Vec3]) -> Vec<Vec3> {
     let half = m.lost * 0.5;
+    // Each search starts where the point before ended (see `running_max`).
+    let mut last = u32::MAX;
     let mut far: Vec<(f32, usize)> = base_points
         .iter()
         .enumerate()
         .filter_map(|(i, &p)| {
-            let d = m.grid.distance_above(p, half);
+            let d;
+            (d, last) = m.grid.nearest_above(p, half, last);
             (d > half && d.is_finite()).then_some((d, i))
         })
         .collect();
@@ -200,11 +206,13 @@ pub(super) fn posed_far_vertices(
 ) -> Vec<Vec3> {
     let grid = TriangleGrid::new(build_posed, indices);
     let half = farthest * 0.5;
+    let mut last = u32::MAX;
     let mut far: Vec<(f32, usize)> = used
         .iter()
         .enumerate()
         .filter_map(|(i, &v)| {
-            let d = grid.distance_above(base_posed[v as usize], half);
+            let d;
+            (d, last) = grid.nearest_above(base_posed[v as usize], half, last);
             (d > half && d.is_finite()).then_some((d, i))
         })
         .collect();

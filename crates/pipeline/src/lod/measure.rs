@@ -20,6 +20,9 @@ pub(super) struct Measured {
     pub(super) added: f32,
     /// The result's triangles, for [`far_vertices`].
     grid: TriangleGrid,
+    /// Per LOD 0 point: the triangle of `grid` where its search for `lost` ended, for
+    /// [`far_vertices`]' searches to start at.
+    hints: Vec<u32>,
 }
 
 impl Measured {
@@ -119,8 +122,15 @@ pub(super) fn measure(
     let distinct = distinct(&sample_points(positions, indices));
     let added = farthest(&distinct, base_grid, 0.0, f32::INFINITY).unwrap_or(f32::INFINITY);
     let grid = TriangleGrid::new(positions, indices);
-    let lost = farthest(base_points, &grid, added, f32::INFINITY).unwrap_or(f32::INFINITY);
-    Measured { lost, added, grid }
+    let mut hints = vec![u32::MAX; base_points.len()];
+    let lost = farthest_hinted(base_points, &grid, added, f32::INFINITY, &mut hints)
+        .unwrap_or(f32::INFINITY);
+    Measured {
+        lost,
+        added,
+        grid,
+        hints,
+    }
 }
 
 /// [`measure`], or `None` as soon as the distance is known to be at least `limit`.
@@ -136,8 +146,14 @@ pub(super) fn measure_below(
     let distinct = distinct(&sample_points(positions, indices));
     let added = farthest(&distinct, base_grid, 0.0, limit)?;
     let grid = TriangleGrid::new(positions, indices);
-    let lost = farthest(base_points, &grid, added, limit)?;
-    Some(Measured { lost, added, grid })
+    let mut hints = vec![u32::MAX; base_points.len()];
+    let lost = farthest_hinted(base_points, &grid, added, limit, &mut hints)?;
+    Some(Measured {
+        lost,
+        added,
+        grid,
+        hints,
+    })
 }
 
 /// The distance of LOD 0's farthest point of `base_points` from the triangles `indices` (into
@@ -176,14 +192,19 @@ pub(super) fn with_points(m: &Measured, extra: &[Vec3], limit: f32) -> Option<f3
 /// [`REPAIR_VERTICES`].
 pub(super) fn far_vertices(m: &Measured, base_points: &[Vec3]) -> Vec<Vec3> {
     let half = m.lost * 0.5;
-    // Each search starts where the point before ended (see `running_max`).
+    // Each search starts where the point's search for `m.lost` ended (or, without one, where the
+    // point before ended: see `running_max`).
     let mut last = u32::MAX;
     let mut far: Vec<(f32, usize)> = base_points
         .iter()
         .enumerate()
         .filter_map(|(i, &p)| {
+            let hint = match m.hints.get(i) {
+                Some(&h) if h != u32::MAX => h,
+                _ => last,
+            };
             let d;
-            (d, last) = m.grid.nearest_above(p, half, last);
+            (d, last) = m.grid.nearest_above(p, half, hint);
             (d > half && d.is_finite()).then_some((d, i))
         })
         .collect();

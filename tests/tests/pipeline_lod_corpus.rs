@@ -14,8 +14,8 @@ use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{ClipBinding, Lod, Sampler};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{
-    generate_lods, generate_lods_tuned, plain_work, reference_poses, LodOptions, LodTuning,
-    PLAIN_WORK_BOUND,
+    generate_lods, generate_lods_tuned, plain_work, reference_poses, scene_motion, LodOptions,
+    LodTuning, PLAIN_WORK_BOUND,
 };
 use sinew_scene::Scene;
 use sinew_testdata::geometry::*;
@@ -585,11 +585,8 @@ fn default_builds_small_meshes_the_plain_ways_too() {
         }
         assert_eq!(scene.meshes.len(), 1, "{file}");
         let skeleton = scene.skeleton.as_ref();
-        let reference = match skeleton {
-            Some(s) => reference_poses(&scene.clips, s),
-            None => Vec::new(),
-        };
-        let work = plain_work(&scene.meshes[0].geometry, skeleton, &reference);
+        let motion = scene_motion(&scene.clips, skeleton);
+        let work = plain_work(&scene.meshes[0].geometry, skeleton, &motion.poses);
         assert!(work <= PLAIN_WORK_BOUND, "{file}: work {work}");
         let (reached, r) = rest_at(&chain_at(&scene, &[tris]));
         assert!(reached <= tris, "{file}: {reached}");

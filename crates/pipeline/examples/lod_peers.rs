@@ -30,9 +30,7 @@ mod lod_common;
 use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{
-    generate_lods_tuned, plain_work, reference_poses, LodOptions, LodTuning,
-};
+use sinew_pipeline::lod::{generate_lods_tuned, plain_work, scene_motion, LodOptions, LodTuning};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::{Path, PathBuf};
@@ -198,11 +196,8 @@ fn main() {
             };
             let mname = mesh.name.replace('"', "'");
             let sinew_one = only(&s, mi);
-            let reference = match &scene.skeleton {
-                Some(sk) => reference_poses(&scene.clips, sk),
-                None => Vec::new(),
-            };
-            let work = plain_work(&mesh.geometry, scene.skeleton.as_ref(), &reference);
+            let motion = scene_motion(&scene.clips, scene.skeleton.as_ref());
+            let work = plain_work(&mesh.geometry, scene.skeleton.as_ref(), &motion.poses);
             for k in 0..sinew_one.meshes[0].lods.len() {
                 let (rest, posed) = r.measure(&sinew_one, Some(k), true);
                 println!(

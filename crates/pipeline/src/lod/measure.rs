@@ -85,19 +85,12 @@ fn running_max(
     hints: &mut [u32],
     step: usize,
 ) -> Option<f32> {
-    let hinted = hints.len() == points.len();
     let mut m = floor;
-    // Without hints, the triangle the point before ended on: neighbouring points of a list (a
-    // triangle's centroid and midpoints, vertices in first-use order) are near each other.
     let mut last = u32::MAX;
     for i in (0..points.len()).step_by(step) {
-        let hint = match hints.get(i) {
-            Some(&h) if hinted && h != u32::MAX => h,
-            _ => last,
-        };
-        let (d, nearest) = grid.nearest_above(points[i], m, hint);
-        if hinted {
-            hints[i] = nearest;
+        let (d, nearest) = grid.nearest_above(points[i], m, hint_at(hints, i, last));
+        if let Some(h) = hints.get_mut(i) {
+            *h = nearest;
         }
         last = nearest;
         m = m.max(d);
@@ -106,6 +99,16 @@ fn running_max(
         }
     }
     Some(m)
+}
+
+/// The triangle point `i`'s search starts at: its hint, or without one the triangle where the
+/// point before ended (`last`): neighbouring points of a list (a triangle's centroid and
+/// midpoints, vertices in first-use order) are near each other.
+fn hint_at(hints: &[u32], i: usize, last: u32) -> u32 {
+    match hints.get(i) {
+        Some(&h) if h != u32::MAX => h,
+        _ => last,
+    }
 }
 
 /// Points per parallel chunk of [`farthest`].
@@ -191,26 +194,11 @@ pub(super) fn with_points(m: &Measured, extra: &[Vec3], limit: f32) -> Option<f3
 /// must be exact: larger than `m.added`), farthest first (ties in `base_points`' order), at most
 /// [`REPAIR_VERTICES`].
 pub(super) fn far_vertices(m: &Measured, base_points: &[Vec3]) -> Vec<Vec3> {
-    let half = m.lost * 0.5;
-    // Each search starts where the point's search for `m.lost` ended (or, without one, where the
-    // point before ended: see `running_max`).
-    let mut last = u32::MAX;
-    let mut far: Vec<(f32, usize)> = base_points
-        .iter()
-        .enumerate()
-        .filter_map(|(i, &p)| {
-            let hint = match m.hints.get(i) {
-                Some(&h) if h != u32::MAX => h,
-                _ => last,
-            };
-            let d;
-            (d, last) = m.grid.nearest_above(p, half, hint);
-            (d > half && d.is_finite()).then_some((d, i))
-        })
-        .collect();
-    far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    far.truncate(REPAIR_VERTICES);
-    far.into_iter().map(|(_, i)| base_points[i]).collect()
+    // Each search starts where the point's search for `m.lost` ended.
+    far_first(&m.grid, base_points.iter().copied(), m.lost, &m.hints)
+        .into_iter()
+        .map(|i| base_points[i])
+        .collect()
 }
 
 /// The rest positions (`rest`) of LOD 0's vertices `used` that are farthest from a build in one
@@ -226,22 +214,35 @@ pub(super) fn posed_far_vertices(
     farthest: f32,
 ) -> Vec<Vec3> {
     let grid = TriangleGrid::new(build_posed, indices);
+    let points = used.iter().map(|&v| base_posed[v as usize]);
+    far_first(&grid, points, farthest, &[])
+        .into_iter()
+        .map(|i| rest[used[i] as usize])
+        .collect()
+}
+
+/// The positions in `points` of those more than half of `farthest` from `grid`'s triangles,
+/// farthest first (ties in order), at most [`REPAIR_VERTICES`]; each search starts at its hint
+/// in `hints` (see [`hint_at`]).
+fn far_first(
+    grid: &TriangleGrid,
+    points: impl Iterator<Item = Vec3>,
+    farthest: f32,
+    hints: &[u32],
+) -> Vec<usize> {
     let half = farthest * 0.5;
     let mut last = u32::MAX;
-    let mut far: Vec<(f32, usize)> = used
-        .iter()
+    let mut far: Vec<(f32, usize)> = points
         .enumerate()
-        .filter_map(|(i, &v)| {
+        .filter_map(|(i, p)| {
             let d;
-            (d, last) = grid.nearest_above(base_posed[v as usize], half, last);
+            (d, last) = grid.nearest_above(p, half, hint_at(hints, i, last));
             (d > half && d.is_finite()).then_some((d, i))
         })
         .collect();
     far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     far.truncate(REPAIR_VERTICES);
-    far.into_iter()
-        .map(|(_, i)| rest[used[i] as usize])
-        .collect()
+    far.into_iter().map(|(_, i)| i).collect()
 }
 
 /// The points of `points` with distinct positions (bit for bit), first occurrences, in order.

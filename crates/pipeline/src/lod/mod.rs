@@ -54,8 +54,8 @@ use measure::{
     distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
     with_points, Measured,
 };
+use motion::plain_builds_of;
 pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, SceneMotion};
-use motion::{plain_builds, plain_builds_of};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
@@ -287,10 +287,15 @@ pub fn build_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<LodChain, LodError> {
-    let plain = plain_builds(tuning, &mesh.geometry, skeleton, &[]);
+    let plain = plain_builds_of(
+        std::slice::from_ref(mesh),
+        skeleton,
+        tuning,
+        &SceneMotion::default(),
+    );
     build_lods_timed(
         mesh,
-        plain.then_some(&mesh.geometry),
+        plain[0].then_some(&mesh.geometry),
         skeleton,
         options,
         tuning,

@@ -29,20 +29,10 @@ pub fn plain_work(lod: &Lod, skeleton: Option<&Skeleton>, reference: &[Vec<Trans
 /// "Cost").
 const PLAIN_REST_WORK: usize = 8;
 
-/// Whether a mesh's LOD steps are also built the plain ways ([`LodTuning::plain_candidate`], or
-/// its [`plain_work`] within [`LodTuning::plain_work_bound`]).
-pub(super) fn plain_builds(
-    tuning: &LodTuning,
-    lod: &Lod,
-    skeleton: Option<&Skeleton>,
-    reference: &[Vec<Transform>],
-) -> bool {
-    tuning.plain_candidate || plain_work(lod, skeleton, reference) <= tuning.plain_work_bound
-}
-
-/// Per mesh, whether its LOD steps are also built the plain ways: [`plain_builds`], and beyond
-/// [`LodTuning::plain_work_bound`] while the meshes' [`plain_work`] (in mesh order) fits in the
-/// scene's clip share (`motion.joint_keys / CLIP_KEYS_PER_PLAIN_WORK`): where the file's clips
+/// Per mesh, whether its LOD steps are also built the plain ways: on every mesh with
+/// [`LodTuning::plain_candidate`]; otherwise where its [`plain_work`] is within
+/// [`LodTuning::plain_work_bound`], and beyond it while the meshes' work (in mesh order) fits in
+/// the scene's clip share (`motion.joint_keys / CLIP_KEYS_PER_PLAIN_WORK`): where the file's clips
 /// are large, the plain builds are a small part of the convert (docs/lod.md, "Cost").
 pub(super) fn plain_builds_of(
     meshes: &[Mesh],
@@ -58,10 +48,10 @@ pub(super) fn plain_builds_of(
     meshes
         .iter()
         .map(|m| {
-            if plain_builds(tuning, &m.geometry, skeleton, &motion.poses) {
+            let work = plain_work(&m.geometry, skeleton, &motion.poses);
+            if tuning.plain_candidate || work <= tuning.plain_work_bound {
                 return true;
             }
-            let work = plain_work(&m.geometry, skeleton, &motion.poses);
             let fits = work <= share;
             if fits {
                 share -= work;

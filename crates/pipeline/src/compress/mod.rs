@@ -33,9 +33,9 @@
 //!    for as long as the measured error (kept up to date incrementally) stays within the limits.
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
-//!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the two
-//!    smallest are measured from that budget and get step 4's refinement, and the smallest result
-//!    that the runtime sampler measures within the limits is kept.
+//!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the
+//!    smallest is measured from that budget and gets step 4's refinement, and the result (or, if
+//!    the runtime sampler does not measure it within the limits, the unrefined one) is kept.
 //!
 //! Steps 1 to 5 first run on a *thinned* source when that leaves out at least a fifth of its key
 //! times: the source without the times where it is within 1% of the tolerance of linear
@@ -46,10 +46,10 @@
 //! otherwise the search runs again on the whole source. So the tolerance holds at every source key
 //! time either way, and the search measures fewer times where the source has more than it needs.
 //!
-//! `CompressOptions::effort` ([`Effort`]) sets how many candidates step 5 refines: `Fast` the one
-//! smallest, `Default` the two smallest, `Max` also every layout measured, more key budgets and
-//! segment lengths, and the whole source as well as the thinned one, with the default's result
-//! among its candidates (so never a larger result).
+//! `CompressOptions::effort` ([`Effort`]) sets how hard step 5 searches: `Fast` refines the one
+//! candidate without the refinement's graded first rounds, `Default` with them, `Max` also every
+//! layout measured, more key budgets and segment lengths, and the whole source as well as the
+//! thinned one, with the default's result among its candidates (so never a larger result).
 //!
 //! # Speed, and the same bytes at any thread count
 //!
@@ -62,8 +62,8 @@
 //!   them, and check first the time where the last failing check stopped (in this ladder or the
 //!   previous layout's).
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
-//!   layouts, the next two rungs of a first-width ladder, and the refinements of the best
-//!   candidates. A long clip's single refinement spreads its own tries: a try writes only into its
+//!   layouts, the next two rungs of a first-width ladder, and `Max`'s refinements of several
+//!   candidates. The default's single refinement spreads its own tries: a try writes only into its
 //!   own buffers, and tries on segments two or more apart read and write disjoint keys and times,
 //!   so each wavefront of such tries is worked out in parallel and committed in the sequential
 //!   order. Every result is collected in a fixed order and the choices are the sequential ones, so

@@ -5,12 +5,11 @@
 pub const DEFAULT_RELATIVE_TOLERANCE: f32 = 0.0005;
 /// Default error distance as a fraction of the skeleton's extent: 0.05 (0.1 units on a 2-unit figure).
 pub const DEFAULT_RELATIVE_DISTANCE: f32 = 0.05;
-/// How many of the candidate layouts (smallest estimated size first) are refined: two, side by
-/// side on two cores; a third or fourth changed the corpus's clips by less than 0.1% in total.
-pub(super) const DESCENDED: usize = 2;
-/// Clips with more source keys x joints than this refine only their best candidate layout (the
-/// refinement's cost grows with both).
-pub(super) const LARGE_CLIP: usize = 20_000;
+/// How many of the candidate layouts (smallest estimated size first) `Fast` and `Default` refine:
+/// one, its tries spread over the threads. A second one refined beside it (the default until
+/// session 14) changed 6 of the corpus's 74 clips, by +0.9% to +7% (0.056% in total), for twice the
+/// refinement's work; a third or fourth, less than 0.1% more (docs/performance.md, session 14).
+pub(super) const DESCENDED: usize = 1;
 /// Clips with more kept keys than this try only segments of 16 and 32 keys.
 pub(super) const SHORT_CLIP: usize = 256;
 /// Key-reduction budgets tried for each clip, as fractions of the tolerance (the rest is left to
@@ -30,8 +29,8 @@ pub(super) const MAX_DESCENDED: usize = 8;
 
 /// How much searching the encoder does for a small clip (every effort keeps the tolerance).
 ///
-/// - `Fast`: the default's candidates, only the smallest refined, and its refinement without the
-///   graded first rounds ([`super::search::THRESHOLDS`]): every round at the full limit.
+/// - `Fast`: the default's candidate, refined without the graded first rounds
+///   ([`super::search::THRESHOLDS`]): every round at the full limit.
 /// - `Default`: the search of the module docs.
 /// - `Max`: the default's candidates (the same ones, so never a larger result) and more key budgets
 ///   ([`MAX_EXTRA_KEY_BUDGETS`]) and segment lengths ([`MAX_EXTRA_SEGMENTS`]), with up to

@@ -6,8 +6,8 @@ use super::metric::{
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, LARGE_CLIP, MAX_DESCENDED,
-    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, MAX_DESCENDED, MAX_EXTRA_KEY_BUDGETS,
+    MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
@@ -314,9 +314,9 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
 ///
 /// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) is a work; each work
 /// has a layout per segment length of [`segment_candidates`]. [`estimated_candidates`] measures
-/// one layout per work and estimates the others; the [`DESCENDED`] smallest (one for `Fast` and for
-/// clips above [`LARGE_CLIP`]) are refined by [`descend`], and the smallest result is kept (the first
-/// of equals). `Max` adds [`exhaustive_candidates`]. `compensate`: quantize rotations with chain
+/// one layout per work and estimates the others; the [`DESCENDED`] smallest are refined by
+/// [`descend`], and the smallest result is kept (the first of equals). `Max` adds
+/// [`exhaustive_candidates`]. `compensate`: quantize rotations with chain
 /// compensation (only when every scale of the source poses is positive and uniform).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn compress_work(
@@ -411,14 +411,8 @@ pub(super) fn compress_work(
     let layouts: Vec<(usize, Layout, bool)> = map_in_order(plan, par, |(wi, l, core)| {
         (wi, Layout::with_segments(&bases[wi], l), core)
     });
-    let volume = times.len() * rig.skeleton.len();
-    let descended = match effort {
-        Effort::Fast => 1,
-        _ if volume > LARGE_CLIP => 1,
-        _ => DESCENDED,
-    };
     let mut chosen: Vec<(usize, Start)> = estimated_candidates(
-        &ctx, &layouts, &works, source, tolerance, compensate, par, descended,
+        &ctx, &layouts, &works, source, tolerance, compensate, par, DESCENDED,
     )
     .into_iter()
     .map(|(li, e)| (li, Start::State(Box::new(e))))
@@ -438,9 +432,9 @@ pub(super) fn compress_work(
     }
     // The refinements are independent: run in parallel, the smallest kept (the first of equals
     // in candidate order, so the result does not depend on the thread count).
-    // A long clip's one refinement spreads its own tries over the threads (its wavefronts are
-    // wide: many segments); shorter clips refine several candidates side by side instead.
-    let alone = par && chosen.len() == 1 && volume > LARGE_CLIP;
+    // One refinement (`Fast` and `Default`) spreads its own tries over the threads; `Max`'s
+    // several candidates are refined side by side instead.
+    let alone = par && chosen.len() == 1;
     let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(li, start)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];

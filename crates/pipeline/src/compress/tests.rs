@@ -455,18 +455,20 @@ fn tries_two_segments_apart_do_not_see_each_other() {
 }
 
 #[test]
-fn a_long_clip_refined_alone_compresses_to_the_same_bytes_at_any_thread_count() {
-    // Above LARGE_CLIP one candidate is refined, and its tries are spread over the threads
-    // (wavefronts of tries on segments two apart).
+fn a_refinement_spread_over_the_threads_compresses_to_the_same_bytes_at_any_thread_count() {
+    // From PARALLEL_VOLUME on, the one refined candidate's tries are spread over the threads
+    // (wavefronts of tries on segments two apart): a clip just above it and a long one.
     let skeleton = chain(6, 0.3);
-    let clip = swing_moving(&skeleton, 3400, true);
-    assert!(clip.times().len() * skeleton.len() > LARGE_CLIP);
-    let runs = on_1_2_3_threads(&clip, &skeleton, &CompressOptions::peers());
-    assert!(runs[0].0.is_compressed());
-    assert!(runs[0].1.max_error <= 0.001, "{:?}", runs[0].1);
-    for r in &runs[1..] {
-        assert_eq!(r.0, runs[0].0);
-        assert_eq!(r.1, runs[0].1);
+    for keys in [300, 3400] {
+        let clip = swing_moving(&skeleton, keys, true);
+        assert!(clip.times().len() * skeleton.len() >= PARALLEL_VOLUME);
+        let runs = on_1_2_3_threads(&clip, &skeleton, &CompressOptions::peers());
+        assert!(runs[0].0.is_compressed());
+        assert!(runs[0].1.max_error <= 0.001, "{:?}", runs[0].1);
+        for r in &runs[1..] {
+            assert_eq!(r.0, runs[0].0, "{keys} keys");
+            assert_eq!(r.1, runs[0].1, "{keys} keys");
+        }
     }
 }
 

@@ -62,8 +62,9 @@ pub(super) fn plain_builds_of(
 }
 
 /// Clip joint-keys per unit of [`plain_work`] the clips' share allows: the clip encoder spends
-/// 30-100k instructions per joint-key and the plain builds 5-12k per unit (docs/lod.md, "Cost"),
-/// so a share of one unit per two joint-keys is at most about a tenth of the encoder's work.
+/// 20-61k instructions per joint-key (30-100k when this was set, before session 14's encoder
+/// changes) and the plain builds 5-12k per unit (docs/lod.md, "Cost"), so a share of one unit per
+/// two joint-keys is a few percent to a third of the encoder's work.
 const CLIP_KEYS_PER_PLAIN_WORK: usize = 2;
 
 /// What the LOD builder takes from a scene's clips ([`scene_motion`]).

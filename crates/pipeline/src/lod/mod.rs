@@ -60,7 +60,7 @@ use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
-use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Plain, Step};
+use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Step};
 pub use step::{LodTuning, PLAIN_WORK_BOUND};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
 
@@ -390,11 +390,7 @@ fn build_lods_timed(
         None
     };
     let plains: Vec<Step> = match &plain_source {
-        Some(source) => vec![
-            Step::plain(source, tuning, Plain::Normals),
-            Step::plain(source, tuning, Plain::Positions),
-            Step::plain(source, tuning, Plain::Sloppy),
-        ],
+        Some(source) => Step::plains(source, tuning),
         None => Vec::new(),
     };
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
@@ -594,6 +590,14 @@ fn build_lods_timed(
                     .get_or_init(|| plain.run(target, plain_budget, keep))
                     .clone();
                 if other.indices.len() > most {
+                    continue;
+                }
+                // The same triangles as an earlier plain build (the sloppy build when the first
+                // pass reached the target): the same distances, so the same verdict, which left
+                // `best` as it is (an equal build is not closer).
+                let same =
+                    |c: &Candidate| c.indices == other.indices && c.submeshes == other.submeshes;
+                if plain_built[..i].iter().filter_map(|c| c.get()).any(same) {
                     continue;
                 }
                 let source = plain.source();

@@ -111,6 +111,46 @@ pub(super) enum Plain {
     Sloppy,
 }
 
+/// The first passes (within gltfpack's 1% limit) of the plain builds that share their settings:
+/// [`Plain::Normals`] and [`Plain::Sloppy`] differ only after it, so the second one's is the first
+/// one's, asked of meshoptimizer once (the same call on the same input: the same result).
+#[derive(Default)]
+pub(super) struct FirstPasses(std::sync::Mutex<Vec<FirstPass>>);
+
+/// One first pass: its input (the triangles, the vertex flags and the target) and its result.
+struct FirstPass {
+    part: Vec<u32>,
+    locks: Vec<SimplifyVertex>,
+    target: usize,
+    result: (Vec<u32>, f32),
+}
+
+impl FirstPasses {
+    /// The result kept for this input, if any.
+    fn get(
+        &self,
+        part: &[u32],
+        locks: &[SimplifyVertex],
+        target: usize,
+    ) -> Option<(Vec<u32>, f32)> {
+        let kept = self.0.lock().ok()?;
+        kept.iter()
+            .find(|f| f.target == target && f.part == part && f.locks == locks)
+            .map(|f| f.result.clone())
+    }
+
+    fn put(&self, part: &[u32], locks: &[SimplifyVertex], target: usize, result: &(Vec<u32>, f32)) {
+        if let Ok(mut kept) = self.0.lock() {
+            kept.push(FirstPass {
+                part: part.to_vec(),
+                locks: locks.to_vec(),
+                target,
+                result: result.clone(),
+            });
+        }
+    }
+}
+
 /// Model-space positions of every vertex under a test pose, by plain linear blend skinning.
 fn posed_positions(lod: &Lod, skeleton: &Skeleton, axis: glam::Vec3) -> Vec<glam::Vec3> {
     let turn = glam::Quat::from_axis_angle(axis, TEST_POSE_ANGLE_DEGREES.to_radians());
@@ -367,6 +407,8 @@ pub(super) struct Step<'a> {
     plain: Option<Plain>,
     /// Attributes per vertex in `attrs` (the first of `weights`).
     count: usize,
+    /// Where a plain build's first passes are kept for the other plain builds of its settings.
+    first_passes: Option<std::sync::Arc<FirstPasses>>,
 }
 
 impl<'a> Step<'a> {
@@ -420,6 +462,7 @@ impl<'a> Step<'a> {
             whole: tuning.whole_mesh && source.submeshes.len() > 1,
             plain,
             count,
+            first_passes: None,
         }
     }
 
@@ -445,6 +488,53 @@ impl<'a> Step<'a> {
             (Vec::new(), 0)
         };
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
+    }
+
+    /// The three plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`] and
+    /// [`Plain::Sloppy`], in that order), sharing what they compute alike: the vertex positions,
+    /// material ranges and position ids, and the first pass of the normals and sloppy builds
+    /// ([`FirstPasses`]).
+    pub(super) fn plains(source: &'a Lod, tuning: &LodTuning) -> Vec<Self> {
+        let normals = Step::plain(source, tuning, Plain::Normals);
+        let first_passes = std::sync::Arc::new(FirstPasses::default());
+        let like = |kind: Plain| {
+            let mut s = Step::plain_like(&normals, kind);
+            if kind != Plain::Positions {
+                s.first_passes = Some(std::sync::Arc::clone(&first_passes));
+            }
+            s
+        };
+        let (positions, sloppy) = (like(Plain::Positions), like(Plain::Sloppy));
+        let mut normals = normals;
+        normals.first_passes = Some(std::sync::Arc::clone(&first_passes));
+        vec![normals, positions, sloppy]
+    }
+
+    /// A plain build of `other`'s source of another kind, with `other`'s positions, material
+    /// ranges and position ids (computed once for the source).
+    fn plain_like(other: &Step<'a>, kind: Plain) -> Self {
+        let (count, attrs, weights, flags) = match kind {
+            Plain::Positions => (
+                0,
+                Vec::new(),
+                [0.0f32; ATTRIBUTE_COUNT],
+                SimplifyOptions::Prune,
+            ),
+            _ => (other.count, other.attrs.clone(), other.weights, other.flags),
+        };
+        Step {
+            source: other.source,
+            positions: other.positions.clone(),
+            attrs,
+            weights,
+            flags,
+            of: other.of.clone(),
+            ids: other.ids.clone(),
+            whole: other.whole,
+            plain: Some(kind),
+            count,
+            first_passes: None,
+        }
     }
 
     /// Whether this is a plain build ([`Step::plain`]).
@@ -509,7 +599,17 @@ impl<'a> Step<'a> {
         if self.plain.is_some() && self.count > 0 && max_error > PLAIN_ERROR {
             // gltfpack's error limit first (it changes which collapses each pass makes, not only
             // where simplification stops), then on to the target from there.
-            let (first, err) = self.simplify_once(part, locks, target, PLAIN_ERROR);
+            let kept = self.first_passes.as_deref();
+            let (first, err) = match kept.and_then(|k| k.get(part, locks, target)) {
+                Some(done) => done,
+                None => {
+                    let done = self.simplify_once(part, locks, target, PLAIN_ERROR);
+                    if let Some(k) = kept {
+                        k.put(part, locks, target, &done);
+                    }
+                    done
+                }
+            };
             if first.len() <= target * 3 {
                 return (first, err);
             }

@@ -837,3 +837,25 @@ fn truncations_and_mutations_never_panic() {
         start.elapsed()
     );
 }
+
+#[test]
+fn meshes_and_animations_imported_side_by_side_give_the_same_scene_on_one_thread() {
+    // The importer reads meshes and animations at the same time (rayon::join) and merges them in
+    // a fixed order: the scene, diagnostics included, is the one a single thread builds.
+    for rel in ["CesiumMan.glb", "Fox.glb", "RiggedFigure.glb"] {
+        let Some(path) = corpus_file(&format!("gltf/{rel}")) else {
+            return;
+        };
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| sinew_import::import_path(&path, &ImportOptions::default()).unwrap())
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(!one.meshes.is_empty() && !one.clips.is_empty(), "{rel}");
+        assert_eq!(one, two, "{rel}");
+        assert_eq!(one.diagnostics, two.diagnostics, "{rel}");
+    }
+}

@@ -92,15 +92,50 @@ pub(super) fn import_inner(
     };
 
     scene.materials = materials(doc);
-    import_meshes(file, &l, &g, rig.as_ref(), &mut scene)?;
-    if let Some(rig) = &rig {
-        import_animations(file, &l, &g, rig, &mut scene)?;
-    } else if doc.animations().next().is_some() {
-        scene.diagnostics.push(Diagnostic::warning(
-            "gltf-animations-skipped",
-            "animations need a skeleton; the file has none",
-        ));
-    }
+    // Meshes and animations read the document and write different parts of the scene: each into
+    // a scene of its own, at the same time, then merged in the order they ran in before (meshes,
+    // then clips, each part's diagnostics in its own order; the meshes' error first). A
+    // single-file convert's import is on its critical path (CesiumMan: 4.6M and 3.2M instructions).
+    // A panic on the other thread is contained there, as `import` contains one on this thread
+    // (quietly, with the same message).
+    let contained = |part: Result<Result<Scene, ImportError>, String>| {
+        part.unwrap_or_else(|m| {
+            Err(ImportError::in_section(
+                file,
+                "json",
+                format!("the gltf crate could not interpret the document ({m})"),
+            ))
+        })
+    };
+    let (meshes, clips) = rayon::join(
+        || {
+            contained(crate::guard::contain(|| {
+                let mut part = Scene::new(SourceFormat::Gltf);
+                import_meshes(file, &l, &g, rig.as_ref(), &mut part).map(|()| part)
+            }))
+        },
+        || {
+            contained(crate::guard::contain(|| {
+                let mut part = Scene::new(SourceFormat::Gltf);
+                match &rig {
+                    Some(rig) => import_animations(file, &l, &g, rig, &mut part)?,
+                    None if doc.animations().next().is_some() => {
+                        part.diagnostics.push(Diagnostic::warning(
+                            "gltf-animations-skipped",
+                            "animations need a skeleton; the file has none",
+                        ));
+                    }
+                    None => {}
+                }
+                Ok(part)
+            }))
+        },
+    );
+    let (meshes, clips) = (meshes?, clips?);
+    scene.meshes = meshes.meshes;
+    scene.diagnostics.extend(meshes.diagnostics);
+    scene.clips = clips.clips;
+    scene.diagnostics.extend(clips.diagnostics);
     scene.skeleton = rig.map(|r| r.skeleton);
     Ok(scene)
 }

@@ -111,6 +111,25 @@ pub(super) enum Plain {
     Sloppy,
 }
 
+/// A plain build's attributes (values, per-vertex count), weights and options ([`Step::plain`]):
+/// normals at gltfpack's weight and, for a skinned source, full regularization, or positions alone.
+fn plain_settings(
+    source: &Lod,
+    kind: Plain,
+) -> ((Vec<f32>, usize), [f32; ATTRIBUTE_COUNT], SimplifyOptions) {
+    let mut weights = [0.0f32; ATTRIBUTE_COUNT];
+    let mut flags = SimplifyOptions::Prune;
+    if kind == Plain::Positions {
+        return ((Vec::new(), 0), weights, flags);
+    }
+    weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
+    if source.is_skinned() {
+        flags |= SimplifyOptions::Regularize;
+    }
+    let normals = source.normals.iter().flat_map(|n| n.to_array()).collect();
+    ((normals, 3), weights, flags)
+}
+
 /// The first passes (within gltfpack's 1% limit) of the plain builds that share their settings:
 /// [`Plain::Normals`] and [`Plain::Sloppy`] differ only after it, so the second one's is the first
 /// one's, asked of meshoptimizer once (the same call on the same input: the same result).
@@ -473,20 +492,7 @@ impl<'a> Step<'a> {
     /// first within gltfpack's error limit (1%) and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
     /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
     pub(super) fn plain(source: &'a Lod, tuning: &LodTuning, kind: Plain) -> Self {
-        let mut weights = [0.0f32; ATTRIBUTE_COUNT];
-        let mut flags = SimplifyOptions::Prune;
-        let attrs = if kind != Plain::Positions {
-            weights[0..3].fill(PLAIN_NORMAL_WEIGHT);
-            if source.is_skinned() {
-                flags |= SimplifyOptions::Regularize;
-            }
-            (
-                source.normals.iter().flat_map(|n| n.to_array()).collect(),
-                3,
-            )
-        } else {
-            (Vec::new(), 0)
-        };
+        let (attrs, weights, flags) = plain_settings(source, kind);
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
     }
 
@@ -495,42 +501,28 @@ impl<'a> Step<'a> {
     /// material ranges and position ids, and the first pass of the normals and sloppy builds
     /// ([`FirstPasses`]).
     pub(super) fn plains(source: &'a Lod, tuning: &LodTuning) -> Vec<Self> {
-        let normals = Step::plain(source, tuning, Plain::Normals);
+        let mut normals = Step::plain(source, tuning, Plain::Normals);
         let first_passes = std::sync::Arc::new(FirstPasses::default());
-        let like = |kind: Plain| {
-            let mut s = Step::plain_like(&normals, kind);
-            if kind != Plain::Positions {
-                s.first_passes = Some(std::sync::Arc::clone(&first_passes));
-            }
-            s
-        };
-        let (positions, sloppy) = (like(Plain::Positions), like(Plain::Sloppy));
-        let mut normals = normals;
+        let positions = normals.plain_like(Plain::Positions);
+        let mut sloppy = normals.plain_like(Plain::Sloppy);
         normals.first_passes = Some(std::sync::Arc::clone(&first_passes));
+        sloppy.first_passes = Some(first_passes);
         vec![normals, positions, sloppy]
     }
 
-    /// A plain build of `other`'s source of another kind, with `other`'s positions, material
+    /// A plain build of this step's source of another kind, with this step's positions, material
     /// ranges and position ids (computed once for the source).
-    fn plain_like(other: &Step<'a>, kind: Plain) -> Self {
-        let (count, attrs, weights, flags) = match kind {
-            Plain::Positions => (
-                0,
-                Vec::new(),
-                [0.0f32; ATTRIBUTE_COUNT],
-                SimplifyOptions::Prune,
-            ),
-            _ => (other.count, other.attrs.clone(), other.weights, other.flags),
-        };
+    fn plain_like(&self, kind: Plain) -> Self {
+        let ((attrs, count), weights, flags) = plain_settings(self.source, kind);
         Step {
-            source: other.source,
-            positions: other.positions.clone(),
+            source: self.source,
+            positions: self.positions.clone(),
             attrs,
             weights,
             flags,
-            of: other.of.clone(),
-            ids: other.ids.clone(),
-            whole: other.whole,
+            of: self.of.clone(),
+            ids: self.ids.clone(),
+            whole: self.whole,
             plain: Some(kind),
             count,
             first_passes: None,

@@ -16,9 +16,17 @@ pub fn import(
 ) -> Result<Scene, ImportError> {
     // Last resort: our own checks (`refs`) run before the gltf crate's, but should the crate still
     // panic on something they miss, the file fails with an ordinary error and nothing is printed.
-    crate::guard::contain(|| import_inner(file_name, bytes, resolve, options)).unwrap_or_else(|m| {
+    contained(file_name, || {
+        import_inner(file_name, bytes, resolve, options)
+    })
+}
+
+/// `f`, with a panic inside it (the gltf crate's) contained on this thread: an ordinary error that
+/// names the file, and nothing printed.
+fn contained<T>(file: &str, f: impl FnOnce() -> Result<T, ImportError>) -> Result<T, ImportError> {
+    crate::guard::contain(f).unwrap_or_else(|m| {
         Err(ImportError::in_section(
-            file_name,
+            file,
             "json",
             format!("the gltf crate could not interpret the document ({m})"),
         ))
@@ -98,24 +106,15 @@ pub(super) fn import_inner(
     // single-file convert's import is on its critical path (CesiumMan: 4.6M and 3.2M instructions).
     // A panic on the other thread is contained there, as `import` contains one on this thread
     // (quietly, with the same message).
-    let contained = |part: Result<Result<Scene, ImportError>, String>| {
-        part.unwrap_or_else(|m| {
-            Err(ImportError::in_section(
-                file,
-                "json",
-                format!("the gltf crate could not interpret the document ({m})"),
-            ))
-        })
-    };
     let (meshes, clips) = rayon::join(
         || {
-            contained(crate::guard::contain(|| {
+            contained(file, || {
                 let mut part = Scene::new(SourceFormat::Gltf);
                 import_meshes(file, &l, &g, rig.as_ref(), &mut part).map(|()| part)
-            }))
+            })
         },
         || {
-            contained(crate::guard::contain(|| {
+            contained(file, || {
                 let mut part = Scene::new(SourceFormat::Gltf);
                 match &rig {
                     Some(rig) => import_animations(file, &l, &g, rig, &mut part)?,
@@ -128,7 +127,7 @@ pub(super) fn import_inner(
                     None => {}
                 }
                 Ok(part)
-            }))
+            })
         },
     );
     let (meshes, clips) = (meshes?, clips?);

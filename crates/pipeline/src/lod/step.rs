@@ -491,7 +491,7 @@ impl<'a> Step<'a> {
     /// priority, with meshoptimizer's `Prune` and, for a skinned source, its full `Regularize`,
     /// first within gltfpack's error limit (1%) and then on to the target; [`Plain::Sloppy`] goes on from 1% as gltfpack's `-sa` does.
     /// [`Plain::Positions`]: on positions alone, no attribute, `Prune` only, in one call.
-    pub(super) fn plain(source: &'a Lod, tuning: &LodTuning, kind: Plain) -> Self {
+    fn plain(source: &'a Lod, tuning: &LodTuning, kind: Plain) -> Self {
         let (attrs, weights, flags) = plain_settings(source, kind);
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
     }

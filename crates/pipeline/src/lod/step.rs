@@ -620,10 +620,9 @@ impl<'a> Step<'a> {
 
     /// meshoptimizer's sloppy simplifier on `first` (a build of `part`), as many triangles as it
     /// gives without going over `target`: its clustering grid lands at or below the count asked
-    /// for, often well below
-    /// (zombie's LOD 2: 176 of 178), so when it falls short the count asked for is raised
-    /// (between `target` and `first`'s own count, a few times) and the largest result within
-    /// `target` is kept (the first of equals). Whatever the grid does, the result is within
+    /// for, often well below (zombie's LOD 2: 176 of 178), so when it falls short the count asked
+    /// for is raised (between `target` and `first`'s own count, a few times) and the largest
+    /// result within `target` is kept (the first of equals). Whatever the grid does, the result is within
     /// `target` whenever the first call's is.
     ///
     /// `part`'s vertices alone are given to meshoptimizer, as gltfpack gives it one primitive's:

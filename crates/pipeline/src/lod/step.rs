@@ -98,8 +98,8 @@ const PLAIN_NORMAL_WEIGHT: f32 = 0.5;
 const PLAIN_ERROR: f32 = 0.01;
 /// gltfpack's error limit for its sloppy pass under `-sa` (`target_error_aggressive`).
 const SLOPPY_ERROR: f32 = 0.1;
-/// How many more times a sloppy build that fell short of its target asks the clustering grid for
-/// more triangles ([`Step::sloppy_within`]).
+/// How many more times [`Plain::SloppyNear`], where it fell short of its target, asks the
+/// clustering grid for more triangles ([`Step::sloppy_within`]).
 const SLOPPY_RAISES: usize = 6;
 
 /// How a plain build ([`Step::plain`]) goes.
@@ -112,6 +112,10 @@ pub(super) enum Plain {
     /// gltfpack's `-si -sa`: normals weigh, within 1%, then meshoptimizer's sloppy simplifier
     /// (vertex clustering, which ignores attribute seams) on to the target within 10%.
     Sloppy,
+    /// [`Plain::Sloppy`] as gltfpack gives it one primitive (the part's vertices alone: the grid
+    /// over their box), its clustering grid asked for more where it fell short of the target
+    /// ([`Step::sloppy_within`]): more triangles, not always closer, so a build of its own.
+    SloppyNear,
 }
 
 /// A plain build's attributes (values, per-vertex count), weights and options ([`Step::plain`]):
@@ -499,18 +503,20 @@ impl<'a> Step<'a> {
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
     }
 
-    /// The three plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`] and
-    /// [`Plain::Sloppy`], in that order), sharing what they compute alike: the vertex positions,
-    /// material ranges and position ids, and the first pass of the normals and sloppy builds
-    /// ([`FirstPasses`]).
+    /// The four plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`],
+    /// [`Plain::Sloppy`] and [`Plain::SloppyNear`], in that order), sharing what they compute
+    /// alike: the vertex positions, material ranges and position ids, and the first pass of the
+    /// normals and sloppy builds ([`FirstPasses`]).
     pub(super) fn plains(source: &'a Lod, tuning: &LodTuning) -> Vec<Self> {
         let mut normals = Step::plain(source, tuning, Plain::Normals);
         let first_passes = std::sync::Arc::new(FirstPasses::default());
         let positions = normals.plain_like(Plain::Positions);
         let mut sloppy = normals.plain_like(Plain::Sloppy);
+        let mut near = normals.plain_like(Plain::SloppyNear);
         normals.first_passes = Some(std::sync::Arc::clone(&first_passes));
-        sloppy.first_passes = Some(first_passes);
-        vec![normals, positions, sloppy]
+        sloppy.first_passes = Some(std::sync::Arc::clone(&first_passes));
+        near.first_passes = Some(first_passes);
+        vec![normals, positions, sloppy, near]
     }
 
     /// A plain build of this step's source of another kind, with this step's positions, material
@@ -609,6 +615,18 @@ impl<'a> Step<'a> {
                 return (first, err);
             }
             if self.plain == Some(Plain::Sloppy) {
+                let mut more = 0.0f32;
+                let out = meshopt::simplify_sloppy_with_locks_decoder(
+                    &first,
+                    &self.positions,
+                    locks,
+                    target * 3,
+                    SLOPPY_ERROR.min(max_error),
+                    Some(&mut more),
+                );
+                return (out, err.max(more));
+            }
+            if self.plain == Some(Plain::SloppyNear) {
                 let (out, more) = self.sloppy_within(part, &first, locks, target, max_error);
                 return (out, err.max(more));
             }
@@ -618,12 +636,12 @@ impl<'a> Step<'a> {
         self.simplify_once(part, locks, target, max_error)
     }
 
-    /// meshoptimizer's sloppy simplifier on `first` (a build of `part`), as many triangles as it
-    /// gives without going over `target`: its clustering grid lands at or below the count asked
-    /// for, often well below (zombie's LOD 2: 176 of 178), so when it falls short the count asked
-    /// for is raised (between `target` and `first`'s own count, a few times) and the largest
-    /// result within `target` is kept (the first of equals). Whatever the grid does, the result is within
-    /// `target` whenever the first call's is.
+    /// [`Plain::SloppyNear`]: meshoptimizer's sloppy simplifier on `first` (a build of `part`),
+    /// as many triangles as it gives without going over `target`: its clustering grid lands at or
+    /// below the count asked for, often well below (zombie's LOD 2: 176 of 178), so when it falls
+    /// short the count asked for is raised (between `target` and `first`'s own count) and the
+    /// largest result within `target` is kept (the first of equals). Whatever the grid does, the
+    /// result is within `target` whenever the first call's is.
     ///
     /// `part`'s vertices alone are given to meshoptimizer, as gltfpack gives it one primitive's:
     /// the grid spans the part's box and its 10% limit is of the part's extent (a material range
@@ -637,15 +655,13 @@ impl<'a> Step<'a> {
         target: usize,
         max_error: f32,
     ) -> (Vec<u32>, f32) {
-        // The part's vertices in first-use order, and `first`'s triangles on them.
+        // The part's vertices in their order, and `first`'s triangles on them.
         let mut local_of = vec![u32::MAX; self.positions.len()];
-        let mut used: Vec<u32> = Vec::new();
-        for &v in part {
-            let slot = &mut local_of[v as usize];
-            if *slot == u32::MAX {
-                *slot = used.len() as u32;
-                used.push(v);
-            }
+        let mut used: Vec<u32> = part.to_vec();
+        used.sort_unstable();
+        used.dedup();
+        for (i, &v) in used.iter().enumerate() {
+            local_of[v as usize] = i as u32;
         }
         let local: Vec<u32> = first.iter().map(|&v| local_of[v as usize]).collect();
         let positions: Vec<[f32; 3]> = used.iter().map(|&v| self.positions[v as usize]).collect();

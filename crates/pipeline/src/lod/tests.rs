@@ -251,11 +251,11 @@ fn sloppy_builds_get_as_near_their_target_as_the_grid_allows() {
     let source = sphere(24, 48);
     let part = source.indices.clone();
     let plains = step::Step::plains(&source, &LodTuning::default());
-    let sloppy = &plains[2];
+    let near = &plains[3];
     let locks = vec![SimplifyVertex::empty(); source.positions.len()];
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     for target in [37, 301, 457, 601, 777, 950, 1200, 1500, 1900] {
-        let (out, _) = sloppy.sloppy_within(&part, &part, &locks, target, f32::MAX.sqrt());
+        let (out, _) = near.sloppy_within(&part, &part, &locks, target, f32::MAX.sqrt());
         let once = meshopt::simplify_sloppy_with_locks_decoder(
             &part,
             &positions,

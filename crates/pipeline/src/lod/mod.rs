@@ -28,10 +28,11 @@
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
 //! - on a mesh whose plain builds cost little ([`plain_work`] within
 //!   `LodTuning::plain_work_bound`, or within the share of a file's clips: [`SceneMotion`]), and
-//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), three plain
-//!   builds of the same
-//!   target from LOD 0 as it came in (gltfpack's `-si` way, on positions alone, and gltfpack's
-//!   `-si -sa` way with its sloppy pass: `Step::plain`), each kept instead when it has no more
+//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), four plain
+//!   builds of the same target from LOD 0 as it came in (gltfpack's `-si` way, on positions
+//!   alone, gltfpack's `-si -sa` way with its sloppy pass, and that sloppy pass on the part's
+//!   vertices alone asked for as many triangles as its grid gives within the target:
+//!   `Step::plains`), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
 //!   under the test poses, and is no farther under poses sampled from the scene's clips
 //!   ([`reference_poses`]; ties keep the step's own build); then a posed repair build of the best

@@ -37,7 +37,10 @@ fn main() {
     {
         return;
     }
-    println!("cargo:rustc-link-search=native={}", dir.to_string_lossy());
+    // For the `sinew` binary only: a search directory given to the linker applies to every
+    // `-l` wherever it stands, and libraries (the Python extension links this crate into a
+    // shared object) keep the shared runtime.
+    println!("cargo:rustc-link-arg-bins=-L{}", dir.to_string_lossy());
 }
 
 /// The C++ compiler's `libstdc++.a`, if it has one (`-print-file-name` answers the bare name

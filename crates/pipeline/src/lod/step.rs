@@ -138,8 +138,9 @@ fn plain_settings(
 }
 
 /// The first passes (within gltfpack's 1% limit) of the plain builds that share their settings:
-/// [`Plain::Normals`] and [`Plain::Sloppy`] differ only after it, so the second one's is the first
-/// one's, asked of meshoptimizer once (the same call on the same input: the same result).
+/// [`Plain::Normals`], [`Plain::Sloppy`] and [`Plain::SloppyNear`] differ only after it, so the
+/// later ones' are the first one's, asked of meshoptimizer once (the same call on the same input:
+/// the same result).
 #[derive(Default)]
 pub(super) struct FirstPasses(std::sync::Mutex<Vec<FirstPass>>);
 

@@ -146,6 +146,11 @@ pub(super) struct Eval<'a> {
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
     pub(super) seg_times: Vec<Vec<usize>>,
+    /// The first key and the first source time the per-key and per-time arrays above hold (`qi`,
+    /// `dec`, `raw`, `key_rot`; `local_aff`, `model`): 0 in a whole state, the start of the
+    /// region in a copy that holds one segment's neighbourhood ([`Eval::load_segment`]).
+    pub(super) k0: usize,
+    pub(super) t0: usize,
 }
 
 impl<'a> Eval<'a> {
@@ -231,8 +236,10 @@ impl<'a> Eval<'a> {
             ctx,
             layout,
             compensate,
-            local_aff: vec![Affine3A::IDENTITY; nj * at.len()],
-            model: vec![Affine3A::IDENTITY; nj * at.len()],
+            // Filled time by time ([`Eval::resample`]): a check that fails early touches little
+            // of this memory (a fresh process pays a page fault for every page it touches).
+            local_aff: Vec::with_capacity(nj * at.len()),
+            model: Vec::with_capacity(nj * at.len()),
             nj,
             parents: (0..nj)
                 .map(|j| parents.get(j).copied().flatten().map(usize::from))
@@ -254,6 +261,8 @@ impl<'a> Eval<'a> {
             raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
+            k0: 0,
+            t0: 0,
         };
         let seg_len = layout.seg_len.max(1);
         let fails =
@@ -266,8 +275,7 @@ impl<'a> Eval<'a> {
             {
                 e.requantize_key(k / seg_len, k);
             }
-            e.resample(i);
-            if fails(&e, i) {
+            if e.probe_fails(i) {
                 return (e, Err(i));
             }
         }
@@ -313,9 +321,9 @@ impl<'a> Eval<'a> {
     pub(super) fn requantize_key(&mut self, s: usize, k: usize) {
         let nc = self.layout.comps.len();
         for d in 0..self.nj {
-            let pr = self
-                .parent(d)
-                .map_or(Quat::IDENTITY, |p| self.key_rot[k * self.nj + p]);
+            let pr = self.parent(d).map_or(Quat::IDENTITY, |p| {
+                self.key_rot[(k - self.k0) * self.nj + p]
+            });
             let mut rot = self.base[d].rotation;
             if let Some(tr) = self.track_of[d] {
                 let [ft, fr, fs] = self.first[tr];
@@ -332,13 +340,13 @@ impl<'a> Eval<'a> {
                     for (a, v) in vals.into_iter().enumerate() {
                         self.store(s, c0 + a, k, v, nc);
                     }
-                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k]);
+                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k - self.k0]);
                     let raw = raw_rotation(index, q);
-                    self.raw[ri][k] = raw;
+                    self.raw[ri][k - self.k0] = raw;
                     rot = normalize_rotation(raw);
                 }
             }
-            self.key_rot[k * self.nj + d] = pr * rot;
+            self.key_rot[(k - self.k0) * self.nj + d] = pr * rot;
         }
     }
 
@@ -359,29 +367,65 @@ impl<'a> Eval<'a> {
     /// Quantizes `v` as component `c` of key `k` (in segment `s`).
     pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) {
         let (q, x) = self.params[s * nc + c].quantize(v);
-        self.qi[c][k] = q;
-        self.dec[c][k] = x;
+        self.qi[c][k - self.k0] = q;
+        self.dec[c][k - self.k0] = x;
     }
 
     /// Computes every joint's local pose and model transform at source time `i` (parents first).
+    /// While the state is being built, the times are computed in order and each one's transforms
+    /// are appended; after that, they are replaced.
     pub(super) fn resample(&mut self, i: usize) {
+        let row = (i - self.t0) * self.nj;
+        if row == self.model.len() {
+            let filler = [Affine3A::IDENTITY].repeat(self.nj);
+            self.local_aff.extend_from_slice(&filler);
+            self.model.extend_from_slice(&filler);
+        }
         for d in 0..self.nj {
             let local = match self.track_of[d] {
                 Some(tr) => self.sampled(tr, i, self.base[d]),
                 None => self.base[d],
             };
-            self.local_aff[i * self.nj + d] = local.to_affine();
+            self.local_aff[row + d] = local.to_affine();
             let pm = self
                 .parent(d)
-                .map_or(Affine3A::IDENTITY, |p| self.model[i * self.nj + p]);
-            self.model[i * self.nj + d] = pm * self.local_aff[i * self.nj + d];
+                .map_or(Affine3A::IDENTITY, |p| self.model[row + p]);
+            self.model[row + d] = pm * self.local_aff[row + d];
         }
+    }
+
+    /// Whether some joint exceeds its limit at source time `i`, computed apart from the state
+    /// (the probe of [`Eval::build`], before the times ahead of it are computed): the same
+    /// transforms [`Eval::resample`] computes.
+    fn probe_fails(&self, i: usize) -> bool {
+        let mut model: Vec<Affine3A> = Vec::with_capacity(self.nj);
+        for d in 0..self.nj {
+            let local = match self.track_of[d] {
+                Some(tr) => self.sampled(tr, i, self.base[d]),
+                None => self.base[d],
+            };
+            let pm = self
+                .parent(d)
+                .and_then(|p| model.get(p).copied())
+                .unwrap_or(Affine3A::IDENTITY);
+            model.push(pm * local.to_affine());
+        }
+        model
+            .iter()
+            .enumerate()
+            .any(|(j, m)| exceeds(self.error_at(i, j, m), self.ctx.limits[j]))
     }
 
     /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
     /// the sampler computes it.
     pub(super) fn sampled(&self, tr: usize, i: usize, base: Transform) -> Transform {
-        self.sampled_with(tr, i, base, |c, k| self.dec[c][k], |ri, k| self.raw[ri][k])
+        self.sampled_with(
+            tr,
+            i,
+            base,
+            |c, k| self.dec[c][k - self.k0],
+            |ri, k| self.raw[ri][k - self.k0],
+        )
     }
 
     /// [`Eval::sampled`] with the decoded values (component, key) and decoded rotations (rotation
@@ -424,7 +468,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
-        self.error_at(i, j, &self.model[i * self.nj + j])
+        self.error_at(i, j, &self.model[(i - self.t0) * self.nj + j])
     }
 
     /// Joint `j`'s error at source time `i` with model transform `m`: the largest distance of its
@@ -457,5 +501,174 @@ impl<'a> Eval<'a> {
     pub(super) fn encode(&self, work: &Work) -> Option<Clip> {
         self.layout
             .encode(&self.bits, &self.qi, work, self.ctx.like)
+    }
+}
+
+/// What refining one segment writes in an [`Eval`] ([`Eval::segment_state`]): the segment's
+/// widths and quantization parameters, its keys' stored integers, decoded values, rotations and
+/// model rotations, and the local and model transforms at the source times that read its keys.
+pub(super) struct SegmentState {
+    s: usize,
+    bits: Vec<u8>,
+    params: Vec<Quant>,
+    /// Per component, per key of the segment.
+    qi: Vec<u32>,
+    dec: Vec<f32>,
+    /// Per rotation, per key of the segment.
+    raw: Vec<Quat>,
+    /// Per key of the segment, per joint.
+    key_rot: Vec<Quat>,
+    /// Per source time that reads the segment (in `seg_times` order), per joint.
+    local_aff: Vec<Affine3A>,
+    model: Vec<Affine3A>,
+}
+
+impl<'a> Eval<'a> {
+    /// A copy of this state without its per-key and per-time values: what
+    /// [`Eval::load_segment`] fills with one segment's neighbourhood.
+    pub(super) fn empty_copy(&self) -> Eval<'a> {
+        Eval {
+            ctx: self.ctx,
+            layout: self.layout,
+            compensate: self.compensate,
+            at: self.at.clone(),
+            key_src: self.key_src.clone(),
+            joint: self.joint.clone(),
+            track_of: self.track_of.clone(),
+            first: self.first.clone(),
+            subtree: self.subtree,
+            subtree_parent: self.subtree_parent,
+            base: self.base.clone(),
+            bits: self.bits.clone(),
+            params: self.params.clone(),
+            qi: vec![Vec::new(); self.qi.len()],
+            dec: vec![Vec::new(); self.dec.len()],
+            raw: vec![Vec::new(); self.raw.len()],
+            nj: self.nj,
+            parents: self.parents.clone(),
+            key_rot: Vec::new(),
+            local_aff: Vec::new(),
+            model: Vec::new(),
+            seg_times: self.seg_times.clone(),
+            k0: 0,
+            t0: 0,
+        }
+    }
+
+    /// Makes this copy ([`Eval::empty_copy`]) of a state hold what a refinement of segment `s`
+    /// reads in `from` (the state): the segment's widths and parameters, its keys and the keys
+    /// next to it (a source time that reads the segment reads at most one key on either side),
+    /// and every joint's transforms at the source times that read the segment (a run of
+    /// consecutive times). Only that region is held (`k0`, `t0`).
+    pub(super) fn load_segment(&mut self, from: &Eval, s: usize) {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(s);
+        let near = keys.start.saturating_sub(1)..(keys.end + 1).min(self.layout.keys);
+        let times = &self.seg_times[s];
+        let span = match (times.first(), times.last()) {
+            (Some(&a), Some(&b)) => a..b + 1,
+            _ => 0..0,
+        };
+        let own = s * nc..(s + 1) * nc;
+        self.bits[own.clone()].copy_from_slice(&from.bits[own.clone()]);
+        self.params[own.clone()].copy_from_slice(&from.params[own]);
+        let (k0, t0) = (near.start, span.start);
+        let from_keys = near.start - from.k0..near.end - from.k0;
+        for (to, from) in self.qi.iter_mut().zip(&from.qi) {
+            to.clear();
+            to.extend_from_slice(&from[from_keys.clone()]);
+        }
+        for (to, from) in self.dec.iter_mut().zip(&from.dec) {
+            to.clear();
+            to.extend_from_slice(&from[from_keys.clone()]);
+        }
+        for (to, from) in self.raw.iter_mut().zip(&from.raw) {
+            to.clear();
+            to.extend_from_slice(&from[from_keys.clone()]);
+        }
+        self.key_rot.clear();
+        self.key_rot
+            .extend_from_slice(&from.key_rot[from_keys.start * nj..from_keys.end * nj]);
+        let rows = (span.start - from.t0) * nj..(span.end - from.t0) * nj;
+        self.local_aff.clear();
+        self.local_aff
+            .extend_from_slice(&from.local_aff[rows.clone()]);
+        self.model.clear();
+        self.model.extend_from_slice(&from.model[rows]);
+        (self.k0, self.t0) = (k0, t0);
+    }
+
+    /// What a refinement of segment `s` may have written ([`SegmentState`]).
+    pub(super) fn segment_state(&self, s: usize) -> SegmentState {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(s);
+        let here = keys.start - self.k0..keys.end - self.k0;
+        let own = s * nc..(s + 1) * nc;
+        let times = &self.seg_times[s];
+        let rows = |i: usize| (i - self.t0) * nj..(i - self.t0 + 1) * nj;
+        let keyed = |arrays: &[Vec<u32>]| {
+            let mut out = Vec::with_capacity(arrays.len() * here.len());
+            for v in arrays {
+                out.extend_from_slice(&v[here.clone()]);
+            }
+            out
+        };
+        let qi = keyed(&self.qi);
+        let mut dec = Vec::with_capacity(self.dec.len() * here.len());
+        for v in &self.dec {
+            dec.extend_from_slice(&v[here.clone()]);
+        }
+        let mut raw = Vec::with_capacity(self.raw.len() * here.len());
+        for v in &self.raw {
+            raw.extend_from_slice(&v[here.clone()]);
+        }
+        let mut local_aff = Vec::with_capacity(times.len() * nj);
+        let mut model = Vec::with_capacity(times.len() * nj);
+        for &i in times {
+            local_aff.extend_from_slice(&self.local_aff[rows(i)]);
+            model.extend_from_slice(&self.model[rows(i)]);
+        }
+        SegmentState {
+            s,
+            bits: self.bits[own.clone()].to_vec(),
+            params: self.params[own].to_vec(),
+            qi,
+            dec,
+            raw,
+            key_rot: self.key_rot[here.start * nj..here.end * nj].to_vec(),
+            local_aff,
+            model,
+        }
+    }
+
+    /// Writes back what [`Eval::segment_state`] took (from a copy of this state).
+    pub(super) fn store_segment(&mut self, st: &SegmentState) {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(st.s);
+        let nk = keys.len();
+        let here = keys.start - self.k0..keys.end - self.k0;
+        let own = st.s * nc..(st.s + 1) * nc;
+        self.bits[own.clone()].copy_from_slice(&st.bits);
+        self.params[own].copy_from_slice(&st.params);
+        for (to, from) in self.qi.iter_mut().zip(st.qi.chunks_exact(nk)) {
+            to[here.clone()].copy_from_slice(from);
+        }
+        for (to, from) in self.dec.iter_mut().zip(st.dec.chunks_exact(nk)) {
+            to[here.clone()].copy_from_slice(from);
+        }
+        for (to, from) in self.raw.iter_mut().zip(st.raw.chunks_exact(nk)) {
+            to[here.clone()].copy_from_slice(from);
+        }
+        self.key_rot[here.start * nj..here.end * nj].copy_from_slice(&st.key_rot);
+        let times = std::mem::take(&mut self.seg_times[st.s]);
+        for (n, &i) in times.iter().enumerate() {
+            let rows = (i - self.t0) * nj..(i - self.t0 + 1) * nj;
+            self.local_aff[rows.clone()].copy_from_slice(&st.local_aff[n * nj..(n + 1) * nj]);
+            self.model[rows].copy_from_slice(&st.model[n * nj..(n + 1) * nj]);
+        }
+        self.seg_times[st.s] = times;
     }
 }

@@ -1,5 +1,7 @@
 //! The error metric: virtual points carried through the joint chain, measured against the source clip.
 
+use super::options::PARALLEL_VOLUME;
+use rayon::prelude::*;
 use sinew_core::glam::{Affine3A, Vec3};
 use sinew_core::skeleton::inverse_bind_from_locals;
 use sinew_core::{Channel, Clip, ClipBinding, Sampler, Skeleton, Transform};
@@ -234,36 +236,60 @@ impl Rig {
     /// Local poses of `clip` at each time (joints not driven keep their bind values).
     pub(super) fn poses(&self, clip: &Clip, times: &[f32]) -> Vec<Vec<Transform>> {
         let binding = ClipBinding::new(clip, &self.skeleton);
-        let mut sampler = Sampler::new();
         let defaults: Vec<Transform> = if clip.additive() {
             vec![Transform::IDENTITY; self.skeleton.len()]
         } else {
             self.skeleton.bind_local().to_vec()
         };
-        times
-            .iter()
-            .map(|&t| {
-                let mut pose = defaults.clone();
-                // The output length matches the skeleton and the binding was made for it.
-                let _ = sampler.sample(clip, &binding, &self.skeleton, t, &mut pose);
-                pose
-            })
-            .collect()
+        let poses_at = |times: &[f32]| -> Vec<Vec<Transform>> {
+            let mut sampler = Sampler::new();
+            times
+                .iter()
+                .map(|&t| {
+                    let mut pose = defaults.clone();
+                    // The output length matches the skeleton and the binding was made for it.
+                    let _ = sampler.sample(clip, &binding, &self.skeleton, t, &mut pose);
+                    pose
+                })
+                .collect()
+        };
+        if self.side_by_side(times.len()) {
+            let parts: Vec<Vec<Vec<Transform>>> =
+                times.par_chunks(TIMES_PER_CHUNK).map(poses_at).collect();
+            parts.into_iter().flatten().collect()
+        } else {
+            poses_at(times)
+        }
     }
 
     /// Error points for each pose.
     pub(super) fn all_points(&self, poses: &[Vec<Transform>]) -> Vec<Vec<[Vec3; 3]>> {
-        let mut m = Vec::new();
-        poses
-            .iter()
-            .map(|p| {
-                let mut out = Vec::new();
-                self.points_of(p, &mut m, &mut out);
-                out
-            })
-            .collect()
+        let points_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
+            let mut out = Vec::new();
+            self.points_of(p, m, &mut out);
+            out
+        };
+        if self.side_by_side(poses.len()) {
+            poses.par_iter().map_init(Vec::new, points_of).collect()
+        } else {
+            let mut m = Vec::new();
+            poses.iter().map(|p| points_of(&mut m, p)).collect()
+        }
+    }
+
+    /// Whether a pass over `times` source times of a clip on this rig runs in chunks of
+    /// [`TIMES_PER_CHUNK`] side by side: from [`PARALLEL_VOLUME`] joint-times on, where the
+    /// search's own work is spread too. Every time is computed alone, so the results are the same
+    /// either way.
+    fn side_by_side(&self, times: usize) -> bool {
+        times > TIMES_PER_CHUNK && times * self.skeleton.len() >= PARALLEL_VOLUME
     }
 }
+
+/// Source times per chunk of a pass over a clip's times that runs side by side
+/// ([`Rig::poses`], [`within`]): a chunk's sampler then decodes each segment of a compressed
+/// clip about once.
+const TIMES_PER_CHUNK: usize = 64;
 
 pub(super) fn point_error<'a>(
     a: &'a [[Vec3; 3]],
@@ -309,6 +335,7 @@ pub(super) fn errors_against(
 }
 
 /// True when `clip`, sampled by the runtime at `times`, keeps every joint's error within its limit.
+/// Long clips are checked in chunks side by side ([`Rig::poses`]); the verdict is the same.
 pub(super) fn within(
     src: &[Vec<[Vec3; 3]>],
     rig: &Rig,
@@ -316,14 +343,24 @@ pub(super) fn within(
     times: &[f32],
     limits: &[f32],
 ) -> bool {
-    let mut ok = true;
-    runtime_points(rig, clip, times, |k, pts| {
-        ok = !point_error(&src[k], pts)
-            .zip(limits)
-            .any(|(e, &l)| exceeds(e, l));
-        !ok
-    });
-    ok
+    let holds = |first: usize, times: &[f32]| {
+        let mut ok = true;
+        runtime_points(rig, clip, times, |k, pts| {
+            ok = src
+                .get(first + k)
+                .is_some_and(|s| !point_error(s, pts).zip(limits).any(|(e, &l)| exceeds(e, l)));
+            !ok
+        });
+        ok
+    };
+    if rig.side_by_side(times.len()) {
+        times
+            .par_chunks(TIMES_PER_CHUNK)
+            .enumerate()
+            .all(|(n, chunk)| holds(n * TIMES_PER_CHUNK, chunk))
+    } else {
+        holds(0, times)
+    }
 }
 
 /// Samples `clip` with the runtime's sampler at each of `times` (over the bind pose, or the identity

@@ -63,12 +63,12 @@
 //!   previous layout's).
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and `Max`'s refinements of several
-//!   candidates. The default's single refinement spreads its own tries: a try writes only into its
-//!   own buffers, and tries on segments two or more apart read and write disjoint keys and times,
-//!   so each wavefront of such tries is worked out in parallel and committed in the sequential
-//!   order. Every result is collected in a fixed order and the choices are the sequential ones, so
-//!   the output does not depend on the thread count (tests compare 1, 2 and 3 threads, and the
-//!   wavefronts against one try at a time).
+//!   candidates. The default's single refinement spreads its own work: tries on segments two or
+//!   more apart read and write disjoint keys and times, so each round refines the even segments
+//!   side by side, each on a copy of the state that holds what it reads, then the odd ones, and
+//!   copies back what each wrote. Every result is collected in a fixed order and the choices are
+//!   the sequential ones, so the output does not depend on the thread count (tests compare 1, 2
+//!   and 3 threads, and the side-by-side schedule against one try at a time).
 //!
 //! The limits are per joint: the tolerance less a margin for f32 noise (a few ulps of the joint's
 //! model-space coordinates), so that an independent measurement against the source data also stays
@@ -81,6 +81,7 @@ mod metric;
 mod options;
 mod quantize;
 mod reduce;
+mod refine;
 mod search;
 #[cfg(test)]
 mod tests;

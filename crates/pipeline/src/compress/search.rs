@@ -11,7 +11,7 @@ use super::options::{
 };
 use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
-use super::trial::Trial;
+use super::refine::descend;
 use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::glam::Vec3;
@@ -214,80 +214,6 @@ pub(super) fn first_eval<'a>(
 pub(super) enum Start<'a> {
     State(Box<Eval<'a>>),
     Bits(Vec<u8>),
-}
-
-/// Step 3, second part: rounds of one-bit reductions over every component of every segment. A
-/// reduction is kept when the error it gives, as a fraction of the limit, is within the round's
-/// threshold; thresholds rise over the first rounds (`thresholds`: [`THRESHOLDS`], or none for
-/// [`Effort::Fast`]) so that the cheapest reductions are taken first, then stay at 1 until no
-/// reduction is kept. A reduction that fails
-/// at threshold 1 is not tried again (errors only grow as other widths shrink).
-///
-/// Within a round the tries go component by component, segment by segment. A try reads and writes
-/// only its segment's keys and the source times that read them, so tries on segments two or more
-/// apart are independent: the tries of component `c` on segment `s` with the same `2c + s` (a
-/// wavefront) are worked out at the same time ([`Trial`]; in parallel with `par`) and committed in
-/// order. Every try sees what it would see one at a time, so the result is the same at any thread
-/// count.
-pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
-    let nc = eval.layout.comps.len();
-    let segs = eval.layout.seg_count;
-    if nc == 0 || segs == 0 {
-        return;
-    }
-    let mut blocked = vec![false; nc * segs];
-    // Per component and segment: where its last failed try stopped (a time to measure first).
-    let mut probes = vec![usize::MAX; nc * segs];
-    let steps = 2 * (nc - 1) + segs;
-    let mut trials: Vec<Trial> = (0..segs.div_ceil(2).min(nc))
-        .map(|_| Trial::default())
-        .collect();
-    let mut items: Vec<(usize, usize)> = Vec::new();
-    let mut round = 0;
-    loop {
-        let limit = thresholds.get(round).copied().unwrap_or(1.0);
-        round += 1;
-        let mut changed = false;
-        for step in 0..steps {
-            items.clear();
-            let first = step.saturating_sub(segs - 1).div_ceil(2);
-            for c in first..=(step / 2).min(nc - 1) {
-                let s = step - 2 * c;
-                let i = s * nc + c;
-                if s < segs && eval.bits[i] > 0 && !blocked[i] {
-                    items.push((c, s));
-                }
-            }
-            while trials.len() < items.len() {
-                trials.push(Trial::default());
-            }
-            let (e, hints): (&Eval, &[usize]) = (eval, &probes);
-            let run = |(&(c, s), t): (&(usize, usize), &mut Trial)| {
-                let i = s * nc + c;
-                let probe = hints.get(i).copied().filter(|&p| p != usize::MAX);
-                t.run(e, s, c, e.bits[i] - 1, limit, probe);
-            };
-            if par && items.len() > 1 {
-                items.par_iter().zip(trials.par_iter_mut()).for_each(run);
-            } else {
-                items.iter().zip(trials.iter_mut()).for_each(run);
-            }
-            for (&(c, s), t) in items.iter().zip(&trials) {
-                if t.worst <= limit {
-                    t.commit(eval);
-                    changed = true;
-                } else {
-                    blocked[s * nc + c] = limit >= 1.0;
-                    if t.failed_at != usize::MAX {
-                        probes[s * nc + c] = t.failed_at;
-                    }
-                }
-            }
-        }
-        if !changed && round >= thresholds.len() {
-            break;
-        }
-    }
 }
 
 /// The thresholds of the first rounds of [`descend`] (fractions of the joints' limits).

@@ -6,6 +6,7 @@ use super::metric::*;
 use super::options::*;
 use super::quantize::*;
 use super::reduce::*;
+use super::refine::descend;
 use super::search::*;
 use sinew_core::compressed::smallest_three;
 use sinew_core::format::clip_record_size;
@@ -309,9 +310,9 @@ fn constant_channels_at_the_bind_value_are_stored_as_bind() {
     assert!(matches!(t.scale, Constant(v) if v == Vec3::ONE));
 }
 
-/// The refinement one try at a time, in its documented order (component by component, segment by
-/// segment, each kept try committed before the next is worked out): the reference the wavefront
-/// schedule of [`descend`] must reproduce.
+/// The refinement one try at a time, in its documented order (the even segments, then the odd
+/// ones; on each, component by component, each kept try committed before the next is worked out):
+/// the reference the side-by-side schedule of [`descend`] must reproduce.
 fn descend_one_at_a_time(eval: &mut Eval) {
     let nc = eval.layout.comps.len();
     let segs = eval.layout.seg_count;
@@ -322,8 +323,8 @@ fn descend_one_at_a_time(eval: &mut Eval) {
         let limit = THRESHOLDS.get(round).copied().unwrap_or(1.0);
         round += 1;
         let mut changed = false;
-        for c in 0..nc {
-            for s in 0..segs {
+        for s in (0..segs).step_by(2).chain((1..segs).step_by(2)) {
+            for c in 0..nc {
                 let i = s * nc + c;
                 if eval.bits[i] == 0 || blocked[i] {
                     continue;
@@ -360,9 +361,9 @@ fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
 }
 
 #[test]
-fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
-    // Six joints whose root also moves, 200 keys: 13 segments of 16, so that each wavefront
-    // holds several tries (translations and rotations, whole subtrees under compensation).
+fn the_side_by_side_refinement_makes_the_decisions_of_one_try_at_a_time() {
+    // Six joints whose root also moves, 200 keys: 13 segments of 16, so that each parity holds
+    // several segments (translations and rotations, whole subtrees under compensation).
     let (source, rig) = moving_chain(6, 200);
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
@@ -396,7 +397,7 @@ fn the_wavefront_refinement_makes_the_decisions_of_one_try_at_a_time() {
 
 #[test]
 fn tries_two_segments_apart_do_not_see_each_other() {
-    // What the wavefront relies on: a kept try changes nothing that a try on a segment two or
+    // What the side-by-side refinement relies on: a kept try changes nothing that a try on a segment two or
     // more away reads, so the second try measures the same, bit for bit, before and after the
     // first is committed. Tries on neighbouring segments do see each other (so that this test
     // can tell).
@@ -457,7 +458,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
 #[test]
 fn a_refinement_spread_over_the_threads_compresses_to_the_same_bytes_at_any_thread_count() {
     // From PARALLEL_VOLUME on, the one refined candidate's tries are spread over the threads
-    // (wavefronts of tries on segments two apart): a clip just above it and a long one.
+    // (the segments of one parity side by side): a clip just above it and a long one.
     let skeleton = chain(6, 0.3);
     for keys in [300, 3400] {
         let clip = swing_moving(&skeleton, keys, true);

@@ -315,11 +315,16 @@ pub fn pack(
             .unwrap_or_default();
         let (off, record) = record_layout(&bits, rotation_starts, fixed);
         let mut buf = vec![0u8; (record as usize * n).div_ceil(8) + 8];
+        // The low `nbits` of `v` at bit `bit` (least significant first): at most 32 bits after up
+        // to 7 of the first byte, so five bytes, which the buffer's 8 bytes of padding cover.
         let mut put = |bit: usize, v: u32, nbits: u32| {
-            for i in 0..nbits as usize {
-                if (v >> i) & 1 == 1 {
-                    buf[(bit + i) / 8] |= 1 << ((bit + i) % 8);
-                }
+            if nbits == 0 {
+                return;
+            }
+            let v = u64::from(v) & (u64::MAX >> (64 - nbits.min(32)));
+            let bytes = (v << (bit % 8)).to_le_bytes();
+            for (to, from) in buf[bit / 8..].iter_mut().zip(&bytes[..5]) {
+                *to |= from;
             }
         };
         for k in 0..n {

@@ -149,8 +149,8 @@ pub(super) struct Eval<'a> {
     /// The first key and the first source time the per-key and per-time arrays above hold (`qi`,
     /// `dec`, `raw`, `key_rot`; `local_aff`, `model`): 0 in a whole state, the start of the
     /// region in a copy that holds one segment's neighbourhood ([`Eval::load_segment`]).
-    pub(super) k0: usize,
-    pub(super) t0: usize,
+    pub(super) first_key: usize,
+    pub(super) first_time: usize,
 }
 
 impl<'a> Eval<'a> {
@@ -261,8 +261,8 @@ impl<'a> Eval<'a> {
             raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
-            k0: 0,
-            t0: 0,
+            first_key: 0,
+            first_time: 0,
         };
         let seg_len = layout.seg_len.max(1);
         let fails =
@@ -322,7 +322,7 @@ impl<'a> Eval<'a> {
         let nc = self.layout.comps.len();
         for d in 0..self.nj {
             let pr = self.parent(d).map_or(Quat::IDENTITY, |p| {
-                self.key_rot[(k - self.k0) * self.nj + p]
+                self.key_rot[(k - self.first_key) * self.nj + p]
             });
             let mut rot = self.base[d].rotation;
             if let Some(tr) = self.track_of[d] {
@@ -340,13 +340,13 @@ impl<'a> Eval<'a> {
                     for (a, v) in vals.into_iter().enumerate() {
                         self.store(s, c0 + a, k, v, nc);
                     }
-                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k - self.k0]);
+                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k - self.first_key]);
                     let raw = raw_rotation(index, q);
-                    self.raw[ri][k - self.k0] = raw;
+                    self.raw[ri][k - self.first_key] = raw;
                     rot = normalize_rotation(raw);
                 }
             }
-            self.key_rot[(k - self.k0) * self.nj + d] = pr * rot;
+            self.key_rot[(k - self.first_key) * self.nj + d] = pr * rot;
         }
     }
 
@@ -367,15 +367,15 @@ impl<'a> Eval<'a> {
     /// Quantizes `v` as component `c` of key `k` (in segment `s`).
     pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) {
         let (q, x) = self.params[s * nc + c].quantize(v);
-        self.qi[c][k - self.k0] = q;
-        self.dec[c][k - self.k0] = x;
+        self.qi[c][k - self.first_key] = q;
+        self.dec[c][k - self.first_key] = x;
     }
 
     /// Computes every joint's local pose and model transform at source time `i` (parents first).
     /// While the state is being built, the times are computed in order and each one's transforms
     /// are appended; after that, they are replaced.
     pub(super) fn resample(&mut self, i: usize) {
-        let row = (i - self.t0) * self.nj;
+        let row = (i - self.first_time) * self.nj;
         if row == self.model.len() {
             let filler = [Affine3A::IDENTITY].repeat(self.nj);
             self.local_aff.extend_from_slice(&filler);
@@ -423,8 +423,8 @@ impl<'a> Eval<'a> {
             tr,
             i,
             base,
-            |c, k| self.dec[c][k - self.k0],
-            |ri, k| self.raw[ri][k - self.k0],
+            |c, k| self.dec[c][k - self.first_key],
+            |ri, k| self.raw[ri][k - self.first_key],
         )
     }
 
@@ -468,7 +468,7 @@ impl<'a> Eval<'a> {
     }
 
     pub(super) fn joint_error(&self, i: usize, j: usize) -> f32 {
-        self.error_at(i, j, &self.model[(i - self.t0) * self.nj + j])
+        self.error_at(i, j, &self.model[(i - self.first_time) * self.nj + j])
     }
 
     /// Joint `j`'s error at source time `i` with model transform `m`: the largest distance of its
@@ -550,8 +550,8 @@ impl<'a> Eval<'a> {
             local_aff: Vec::new(),
             model: Vec::new(),
             seg_times: self.seg_times.clone(),
-            k0: 0,
-            t0: 0,
+            first_key: 0,
+            first_time: 0,
         }
     }
 
@@ -559,7 +559,7 @@ impl<'a> Eval<'a> {
     /// reads in `from` (the state): the segment's widths and parameters, its keys and the keys
     /// next to it (a source time that reads the segment reads at most one key on either side),
     /// and every joint's transforms at the source times that read the segment (a run of
-    /// consecutive times). Only that region is held (`k0`, `t0`).
+    /// consecutive times). Only that region is held (`first_key`, `first_time`).
     pub(super) fn load_segment(&mut self, from: &Eval, s: usize) {
         let nc = self.layout.comps.len();
         let nj = self.nj;
@@ -573,8 +573,7 @@ impl<'a> Eval<'a> {
         let own = s * nc..(s + 1) * nc;
         self.bits[own.clone()].copy_from_slice(&from.bits[own.clone()]);
         self.params[own.clone()].copy_from_slice(&from.params[own]);
-        let (k0, t0) = (near.start, span.start);
-        let from_keys = near.start - from.k0..near.end - from.k0;
+        let from_keys = near.start - from.first_key..near.end - from.first_key;
         for (to, from) in self.qi.iter_mut().zip(&from.qi) {
             to.clear();
             to.extend_from_slice(&from[from_keys.clone()]);
@@ -590,13 +589,13 @@ impl<'a> Eval<'a> {
         self.key_rot.clear();
         self.key_rot
             .extend_from_slice(&from.key_rot[from_keys.start * nj..from_keys.end * nj]);
-        let rows = (span.start - from.t0) * nj..(span.end - from.t0) * nj;
+        let rows = (span.start - from.first_time) * nj..(span.end - from.first_time) * nj;
         self.local_aff.clear();
         self.local_aff
             .extend_from_slice(&from.local_aff[rows.clone()]);
         self.model.clear();
         self.model.extend_from_slice(&from.model[rows]);
-        (self.k0, self.t0) = (k0, t0);
+        (self.first_key, self.first_time) = (near.start, span.start);
     }
 
     /// What a refinement of segment `s` may have written ([`SegmentState`]).
@@ -604,10 +603,10 @@ impl<'a> Eval<'a> {
         let nc = self.layout.comps.len();
         let nj = self.nj;
         let keys = self.layout.seg_keys(s);
-        let here = keys.start - self.k0..keys.end - self.k0;
+        let here = keys.start - self.first_key..keys.end - self.first_key;
         let own = s * nc..(s + 1) * nc;
         let times = &self.seg_times[s];
-        let rows = |i: usize| (i - self.t0) * nj..(i - self.t0 + 1) * nj;
+        let rows = |i: usize| (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
         let keyed = |arrays: &[Vec<u32>]| {
             let mut out = Vec::with_capacity(arrays.len() * here.len());
             for v in arrays {
@@ -649,7 +648,7 @@ impl<'a> Eval<'a> {
         let nj = self.nj;
         let keys = self.layout.seg_keys(st.s);
         let nk = keys.len();
-        let here = keys.start - self.k0..keys.end - self.k0;
+        let here = keys.start - self.first_key..keys.end - self.first_key;
         let own = st.s * nc..(st.s + 1) * nc;
         self.bits[own.clone()].copy_from_slice(&st.bits);
         self.params[own].copy_from_slice(&st.params);
@@ -665,7 +664,7 @@ impl<'a> Eval<'a> {
         self.key_rot[here.start * nj..here.end * nj].copy_from_slice(&st.key_rot);
         let times = std::mem::take(&mut self.seg_times[st.s]);
         for (n, &i) in times.iter().enumerate() {
-            let rows = (i - self.t0) * nj..(i - self.t0 + 1) * nj;
+            let rows = (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
             self.local_aff[rows.clone()].copy_from_slice(&st.local_aff[n * nj..(n + 1) * nj]);
             self.model[rows].copy_from_slice(&st.model[n * nj..(n + 1) * nj]);
         }

@@ -288,7 +288,7 @@ impl Trial {
                 // Only the changed translation or scale component, or the subtree's rotations,
                 // differ from the state: the rest of the local transform is the state's (the
                 // values `Transform::to_affine` of the sampled pose gives, bit for bit).
-                let state = e.local_aff[(i - e.t0) * nj + d];
+                let state = e.local_aff[(i - e.first_time) * nj + d];
                 let a = match (self.kind, row.fixed_scale) {
                     (Some(Kind::R), Some(scale)) if row.fr != NONE => {
                         let (k0, k1, alpha) = e.at[i];
@@ -313,7 +313,7 @@ impl Trial {
                         let v = |k: usize| {
                             let at = |x: usize| match self.in_segment(k).filter(|_| x == self.c) {
                                 Some(kk) if self.key_done[kk] => self.dec[kk],
-                                _ => e.dec[x][k - e.k0],
+                                _ => e.dec[x][k - e.first_key],
                             };
                             Vec3::new(at(f), at(f + 1), at(f + 2))
                         };
@@ -335,14 +335,14 @@ impl Trial {
             } else if self.local_set[at] {
                 self.local_aff[at]
             } else {
-                e.local_aff[(i - e.t0) * nj + d]
+                e.local_aff[(i - e.first_time) * nj + d]
             };
             let pm = if row.pj == NONE {
                 Affine3A::IDENTITY
             } else if row.np != NONE {
                 self.model_of(e, pos, i, row.np, row.pj)
             } else {
-                e.model[(i - e.t0) * nj + row.pj]
+                e.model[(i - e.first_time) * nj + row.pj]
             };
             let m = pm * local;
             self.model[at] = m;
@@ -369,7 +369,7 @@ impl Trial {
                 row.track,
                 i,
                 e.base[d],
-                |x, k| e.dec[x][k - e.k0],
+                |x, k| e.dec[x][k - e.first_key],
                 |ri, k| self.raw_of(e, n, ri, k),
             )
         } else {
@@ -379,9 +379,9 @@ impl Trial {
                 e.base[d],
                 |x, k| match self.in_segment(k).filter(|_| x == self.c) {
                     Some(kk) if self.key_done[kk] => self.dec[kk],
-                    _ => e.dec[x][k - e.k0],
+                    _ => e.dec[x][k - e.first_key],
                 },
-                |ri, k| e.raw[ri][k - e.k0],
+                |ri, k| e.raw[ri][k - e.first_key],
             )
         }
     }
@@ -394,12 +394,12 @@ impl Trial {
         e.params[self.s * nc + self.c] = self.quant;
         if !self.rot {
             for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
-                e.qi[self.c][self.key0 + kk - e.k0] = self.qi[kk];
-                e.dec[self.c][self.key0 + kk - e.k0] = self.dec[kk];
+                e.qi[self.c][self.key0 + kk - e.first_key] = self.qi[kk];
+                e.dec[self.c][self.key0 + kk - e.first_key] = self.dec[kk];
             }
         }
         for kk in (0..self.nk).filter(|&kk| self.key_done[kk]) {
-            let k = self.key0 + kk - e.k0;
+            let k = self.key0 + kk - e.first_key;
             for (n, row) in self.rows.iter().enumerate().take(self.reached[kk]) {
                 let at = n * self.nk + kk;
                 if row.fr != NONE {
@@ -418,10 +418,10 @@ impl Trial {
             for (n, row) in self.rows.iter().enumerate() {
                 let at = pos * self.nsub + n;
                 if self.local_set[at] {
-                    e.local_aff[(i - e.t0) * nj + row.d] = self.local_aff[at];
+                    e.local_aff[(i - e.first_time) * nj + row.d] = self.local_aff[at];
                 }
                 if self.model_set[at] {
-                    e.model[(i - e.t0) * nj + row.d] = self.model[at];
+                    e.model[(i - e.first_time) * nj + row.d] = self.model[at];
                 }
             }
         }
@@ -438,7 +438,7 @@ impl Trial {
     fn raw_of(&self, e: &Eval, n: usize, ri: usize, k: usize) -> Quat {
         match self.in_segment(k) {
             Some(kk) if self.key_done[kk] && n < self.reached[kk] => self.raw[n * self.nk + kk],
-            _ => e.raw[ri][k - e.k0],
+            _ => e.raw[ri][k - e.first_key],
         }
     }
 
@@ -459,8 +459,8 @@ impl Trial {
             // A translation or scale component: nothing else depends on it.
             let v = e.layout.comps[self.c].vals[k];
             let (q, y) = self.quant.quantize(v);
-            self.dirty[0] |=
-                q != e.qi[self.c][k - e.k0] || y.to_bits() != e.dec[self.c][k - e.k0].to_bits();
+            self.dirty[0] |= q != e.qi[self.c][k - e.first_key]
+                || y.to_bits() != e.dec[self.c][k - e.first_key].to_bits();
             self.qi[kk] = q;
             self.dec[kk] = y;
             return;
@@ -476,7 +476,7 @@ impl Trial {
             } else if row.np != NONE {
                 self.key_rot[row.np * nk + kk]
             } else {
-                e.key_rot[(k - e.k0) * e.nj + row.pj]
+                e.key_rot[(k - e.first_key) * e.nj + row.pj]
             };
             let mut rot = e.base[row.d].rotation;
             let mut rot_changed = false;
@@ -488,8 +488,8 @@ impl Trial {
                     let x = row.fr + a;
                     let slot = 3 * n + a;
                     let (qq, y) = self.slot_quant[slot].quantize(v);
-                    rot_changed |=
-                        qq != e.qi[x][k - e.k0] || y.to_bits() != e.dec[x][k - e.k0].to_bits();
+                    rot_changed |= qq != e.qi[x][k - e.first_key]
+                        || y.to_bits() != e.dec[x][k - e.first_key].to_bits();
                     self.qi[slot * nk + kk] = qq;
                     self.dec[slot * nk + kk] = y;
                     q[a] = y;
@@ -515,7 +515,7 @@ impl Trial {
         if self.model_set[at] {
             self.model[at]
         } else {
-            e.model[(i - e.t0) * e.nj + d]
+            e.model[(i - e.first_time) * e.nj + d]
         }
     }
 }

@@ -29,7 +29,9 @@
 //!    model-space rotations are products of local ones; otherwise, or if nothing meets the limits
 //!    with it, without compensation).
 //! 4. Bit widths, per component and segment: first the largest uniform error budget whose a-priori
-//!    widths measure within the limits, then one bit at a time off each component of each segment
+//!    widths measure within the limits (on a ladder of factors 2^(1/4), from half the tolerance for
+//!    the first set of kept keys and from the budget the one before reached for the next), then
+//!    one bit at a time off each component of each segment
 //!    for as long as the measured error (kept up to date incrementally) stays within the limits.
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip

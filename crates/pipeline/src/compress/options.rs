@@ -17,6 +17,14 @@ pub(super) const SHORT_CLIP: usize = 256;
 /// refined it changed 4 of the corpus's 74 clips (-2.1% to +0.7%, -0.026% in total without it)
 /// and 6 of 776 Half-Life clips (-0.003%) for 1-9% of the encoder's work; `max` still tries it.
 pub(super) const KEY_BUDGETS: [f32; 3] = [0.5, 0.7, 0.85];
+/// Rungs of the first-width ladder (factors of 2^(1/4)) below the tolerance at which the first
+/// layout's ladder starts: at half the tolerance. A uniform budget is per component, and a joint's
+/// error gathers several components' and its parents', so clips with real motion pass 3 to 7 rungs
+/// down (the corpus, both settings); the ladder finds the same rung from any start where passing
+/// is monotone in the budget, so the start decides how many checks, not what they find. Starting
+/// at the tolerance cost clips such as ninja.ms3d three passing checks (a whole pass each) where
+/// one does; clips of little motion climb from here instead (docs/performance.md, session 16).
+pub(super) const FIRST_RUNGS_DOWN: u32 = 4;
 
 /// Clips with fewer source keys x joints than this are compressed on the calling thread alone:
 /// handing their few milliseconds of work to the thread pool (starting it, waking its threads)

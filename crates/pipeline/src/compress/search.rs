@@ -6,8 +6,8 @@ use super::metric::{
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, KEY_BUDGETS, MAX_DESCENDED, MAX_EXTRA_KEY_BUDGETS,
-    MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FIRST_RUNGS_DOWN, KEY_BUDGETS, MAX_DESCENDED,
+    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
@@ -410,7 +410,10 @@ pub(super) fn estimated_candidates<'a>(
 ) -> Vec<(usize, Eval<'a>)> {
     // (estimated size, layout, budget, the measured state if any)
     let mut sized: Vec<(usize, usize, f32, Option<Eval<'a>>)> = Vec::new();
-    let mut start = tolerance;
+    // The first layout's ladder starts `FIRST_RUNGS_DOWN` rungs below the tolerance (one at a
+    // time, as a descent computes it); the next works' start where the one before ended.
+    let mut start =
+        (0..FIRST_RUNGS_DOWN).fold(tolerance, |b, _| b / std::f32::consts::SQRT_2.sqrt());
     let mut probe = None;
     let mut budget_of: Vec<Option<f32>> = vec![None; works.len()];
     for (li, (wi, layout, core)) in layouts.iter().enumerate() {

@@ -66,9 +66,64 @@ fn signed_bits(values: &[i64]) -> Option<u8> {
     })
 }
 
-/// `times` packed on the grid of `step`, or `None` when they do not fit it (two keys on one frame,
-/// a frame or a residual too large).
-fn pack_with(times: &[f32], step: f64) -> Option<PackedTimes> {
+/// `times` on the grid of `step`: each key's frame and its residual (the time's bit pattern less
+/// the grid time's), and the widths that hold them.
+struct Fit {
+    step: f64,
+    frames: Vec<u64>,
+    residuals: Vec<i64>,
+    gap_bits: u8,
+    residual_bits: u8,
+}
+
+impl Fit {
+    /// Bytes of the packed block.
+    fn len(&self) -> usize {
+        HEADER + data_len(self.frames.len(), self.gap_bits, self.residual_bits) as usize
+    }
+
+    /// The packed block: key 0's residual, then per further key its gap and residual, least
+    /// significant bit first.
+    fn pack(self) -> PackedTimes {
+        let mut data =
+            Vec::with_capacity(
+                data_len(self.frames.len(), self.gap_bits, self.residual_bits) as usize,
+            );
+        // Bits not yet written (fewer than 8 between values) and how many.
+        let (mut acc, mut held) = (0u64, 0u32);
+        let mask = |w: u8| if w == 0 { 0 } else { u64::MAX >> (64 - w) };
+        let mut put = |value: u64, width: u8| {
+            // At most 7 held bits and 32 new ones: within the accumulator.
+            acc |= (value & mask(width)) << held;
+            held += u32::from(width);
+            while held >= 8 {
+                data.push(acc as u8);
+                acc >>= 8;
+                held -= 8;
+            }
+        };
+        for k in 0..self.frames.len() {
+            if k > 0 {
+                put(self.frames[k] - self.frames[k - 1] - 1, self.gap_bits);
+            }
+            put(self.residuals[k] as u64, self.residual_bits);
+        }
+        if held > 0 {
+            data.push(acc as u8);
+        }
+        PackedTimes {
+            step: self.step,
+            first: self.frames.first().copied().unwrap_or(0) as u32,
+            gap_bits: self.gap_bits,
+            residual_bits: self.residual_bits,
+            data,
+        }
+    }
+}
+
+/// `times` on the grid of `step`, or `None` when they do not fit it (two keys on one frame, a
+/// frame or a residual too large).
+fn fit(times: &[f32], step: f64) -> Option<Fit> {
     if !(step.is_finite() && step > 0.0) || times.is_empty() {
         return None;
     }
@@ -96,36 +151,20 @@ fn pack_with(times: &[f32], step: f64) -> Option<PackedTimes> {
     if gap_bits > MAX_BITS {
         return None;
     }
-    let mut data = vec![0u8; data_len(times.len(), gap_bits, residual_bits) as usize];
-    let mut bit = 0usize;
-    let mut put = |value: u64, width: u8| {
-        for b in 0..usize::from(width) {
-            if value >> b & 1 != 0 {
-                data[(bit + b) / 8] |= 1 << ((bit + b) % 8);
-            }
-        }
-        bit += usize::from(width);
-    };
-    let mask = |w: u8| if w == 0 { 0 } else { u64::MAX >> (64 - w) };
-    for k in 0..times.len() {
-        if k > 0 {
-            put(frames[k] - frames[k - 1] - 1, gap_bits);
-        }
-        put(residuals[k] as u64 & mask(residual_bits), residual_bits);
-    }
-    Some(PackedTimes {
+    Some(Fit {
         step,
-        first: frames[0] as u32,
+        frames,
+        residuals,
         gap_bits,
         residual_bits,
-        data,
     })
 }
 
 /// The smallest packing of `times` (strictly increasing, finite, at least 0) on the grids sinew
 /// tries: the clip's nominal rate and its halvings down to 1/256 of a frame (the glTF importer
 /// splits intervals into 2^k pieces, at most 256: docs/formats/gltf.md), and the step that
-/// puts the last key on a whole frame of the nominal rate. `None` when none fits.
+/// puts the last key on a whole frame of the nominal rate (the first of equals, in that order).
+/// `None` when none fits. Only the smallest is packed.
 pub(crate) fn pack(times: &[f32], sample_rate: f32) -> Option<PackedTimes> {
     let rate = f64::from(sample_rate);
     if !(rate.is_finite() && rate > 0.0) {
@@ -140,8 +179,9 @@ pub(crate) fn pack(times: &[f32], sample_rate: f32) -> Option<PackedTimes> {
     }
     steps
         .into_iter()
-        .filter_map(|s| pack_with(times, s))
-        .min_by_key(PackedTimes::len)
+        .filter_map(|s| fit(times, s))
+        .min_by_key(Fit::len)
+        .map(Fit::pack)
 }
 
 /// Why a packed block does not decode.

@@ -382,11 +382,7 @@ impl<'a> Eval<'a> {
             self.model.extend_from_slice(&filler);
         }
         for d in 0..self.nj {
-            let local = match self.track_of[d] {
-                Some(tr) => self.sampled(tr, i, self.base[d]),
-                None => self.base[d],
-            };
-            self.local_aff[row + d] = local.to_affine();
+            self.local_aff[row + d] = self.local_pose(d, i).to_affine();
             let pm = self
                 .parent(d)
                 .map_or(Affine3A::IDENTITY, |p| self.model[row + p]);
@@ -400,20 +396,24 @@ impl<'a> Eval<'a> {
     fn probe_fails(&self, i: usize) -> bool {
         let mut model: Vec<Affine3A> = Vec::with_capacity(self.nj);
         for d in 0..self.nj {
-            let local = match self.track_of[d] {
-                Some(tr) => self.sampled(tr, i, self.base[d]),
-                None => self.base[d],
-            };
             let pm = self
                 .parent(d)
                 .and_then(|p| model.get(p).copied())
                 .unwrap_or(Affine3A::IDENTITY);
-            model.push(pm * local.to_affine());
+            model.push(pm * self.local_pose(d, i).to_affine());
         }
         model
             .iter()
             .enumerate()
             .any(|(j, m)| exceeds(self.error_at(i, j, m), self.ctx.limits[j]))
+    }
+
+    /// Joint `d`'s local pose at source time `i`: its track's, or its base pose without one.
+    fn local_pose(&self, d: usize, i: usize) -> Transform {
+        match self.track_of[d] {
+            Some(tr) => self.sampled(tr, i, self.base[d]),
+            None => self.base[d],
+        }
     }
 
     /// Track `tr`'s local transform at source time `i` (animated channels replaced in `base`), as
@@ -574,18 +574,9 @@ impl<'a> Eval<'a> {
         self.bits[own.clone()].copy_from_slice(&from.bits[own.clone()]);
         self.params[own.clone()].copy_from_slice(&from.params[own]);
         let from_keys = near.start - from.first_key..near.end - from.first_key;
-        for (to, from) in self.qi.iter_mut().zip(&from.qi) {
-            to.clear();
-            to.extend_from_slice(&from[from_keys.clone()]);
-        }
-        for (to, from) in self.dec.iter_mut().zip(&from.dec) {
-            to.clear();
-            to.extend_from_slice(&from[from_keys.clone()]);
-        }
-        for (to, from) in self.raw.iter_mut().zip(&from.raw) {
-            to.clear();
-            to.extend_from_slice(&from[from_keys.clone()]);
-        }
+        load_keys(&mut self.qi, &from.qi, &from_keys);
+        load_keys(&mut self.dec, &from.dec, &from_keys);
+        load_keys(&mut self.raw, &from.raw, &from_keys);
         self.key_rot.clear();
         self.key_rot
             .extend_from_slice(&from.key_rot[from_keys.start * nj..from_keys.end * nj]);
@@ -607,22 +598,6 @@ impl<'a> Eval<'a> {
         let own = s * nc..(s + 1) * nc;
         let times = &self.seg_times[s];
         let rows = |i: usize| (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
-        let keyed = |arrays: &[Vec<u32>]| {
-            let mut out = Vec::with_capacity(arrays.len() * here.len());
-            for v in arrays {
-                out.extend_from_slice(&v[here.clone()]);
-            }
-            out
-        };
-        let qi = keyed(&self.qi);
-        let mut dec = Vec::with_capacity(self.dec.len() * here.len());
-        for v in &self.dec {
-            dec.extend_from_slice(&v[here.clone()]);
-        }
-        let mut raw = Vec::with_capacity(self.raw.len() * here.len());
-        for v in &self.raw {
-            raw.extend_from_slice(&v[here.clone()]);
-        }
         let mut local_aff = Vec::with_capacity(times.len() * nj);
         let mut model = Vec::with_capacity(times.len() * nj);
         for &i in times {
@@ -633,9 +608,9 @@ impl<'a> Eval<'a> {
             s,
             bits: self.bits[own.clone()].to_vec(),
             params: self.params[own].to_vec(),
-            qi,
-            dec,
-            raw,
+            qi: gather_keys(&self.qi, &here),
+            dec: gather_keys(&self.dec, &here),
+            raw: gather_keys(&self.raw, &here),
             key_rot: self.key_rot[here.start * nj..here.end * nj].to_vec(),
             local_aff,
             model,
@@ -647,20 +622,13 @@ impl<'a> Eval<'a> {
         let nc = self.layout.comps.len();
         let nj = self.nj;
         let keys = self.layout.seg_keys(st.s);
-        let nk = keys.len();
         let here = keys.start - self.first_key..keys.end - self.first_key;
         let own = st.s * nc..(st.s + 1) * nc;
         self.bits[own.clone()].copy_from_slice(&st.bits);
         self.params[own].copy_from_slice(&st.params);
-        for (to, from) in self.qi.iter_mut().zip(st.qi.chunks_exact(nk)) {
-            to[here.clone()].copy_from_slice(from);
-        }
-        for (to, from) in self.dec.iter_mut().zip(st.dec.chunks_exact(nk)) {
-            to[here.clone()].copy_from_slice(from);
-        }
-        for (to, from) in self.raw.iter_mut().zip(st.raw.chunks_exact(nk)) {
-            to[here.clone()].copy_from_slice(from);
-        }
+        scatter_keys(&mut self.qi, &st.qi, &here);
+        scatter_keys(&mut self.dec, &st.dec, &here);
+        scatter_keys(&mut self.raw, &st.raw, &here);
         self.key_rot[here.start * nj..here.end * nj].copy_from_slice(&st.key_rot);
         let times = std::mem::take(&mut self.seg_times[st.s]);
         for (n, &i) in times.iter().enumerate() {
@@ -669,5 +637,33 @@ impl<'a> Eval<'a> {
             self.model[rows].copy_from_slice(&st.model[n * nj..(n + 1) * nj]);
         }
         self.seg_times[st.s] = times;
+    }
+}
+
+/// Per-component (or per-rotation) key arrays: `to` made to hold `from`'s keys `range` (indices
+/// into `from`).
+fn load_keys<T: Copy>(to: &mut [Vec<T>], from: &[Vec<T>], range: &std::ops::Range<usize>) {
+    for (to, from) in to.iter_mut().zip(from) {
+        to.clear();
+        to.extend_from_slice(&from[range.clone()]);
+    }
+}
+
+/// Per-component key arrays: the keys `range` of each, one array after the other.
+fn gather_keys<T: Copy>(arrays: &[Vec<T>], range: &std::ops::Range<usize>) -> Vec<T> {
+    let mut out = Vec::with_capacity(arrays.len() * range.len());
+    for v in arrays {
+        out.extend_from_slice(&v[range.clone()]);
+    }
+    out
+}
+
+/// The inverse of [`gather_keys`]: `gathered`'s runs written back into keys `range` of each array.
+fn scatter_keys<T: Copy>(arrays: &mut [Vec<T>], gathered: &[T], range: &std::ops::Range<usize>) {
+    for (to, from) in arrays
+        .iter_mut()
+        .zip(gathered.chunks_exact(range.len().max(1)))
+    {
+        to[range.clone()].copy_from_slice(from);
     }
 }

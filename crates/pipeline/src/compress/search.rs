@@ -2,7 +2,7 @@
 
 use super::eval::{Ctx, Eval, Sampled};
 use super::metric::{
-    clip_extent, errors_against, joint_limits, measure, skeleton_extent, within, Rig,
+    clip_extent, errors_against, exceeds, joint_limits, measure, skeleton_extent, within, Rig,
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
@@ -510,8 +510,9 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 }
 
 /// The search on a source of thinned times first, then (when it found nothing that holds at every
-/// source time, or for `Max`) on the whole source; the smallest result. `whole`: the source
-/// sampled at its times.
+/// source time, or for `Max`) on the whole source; the smallest result, with its errors at every
+/// source time when they were measured already (a result of the thinned search: the check that it
+/// holds measures them). `whole`: the source sampled at its times.
 fn search(
     source: &Clip,
     whole: &Sampled,
@@ -519,7 +520,7 @@ fn search(
     tolerance: f32,
     bind_allowed: bool,
     options: &CompressOptions,
-) -> Option<Clip> {
+) -> Option<(Clip, Option<Vec<f32>>)> {
     let on = |clip: &Clip, sampled: Option<&Sampled>, tolerance: f32, options: &CompressOptions| {
         [true, false].into_iter().find_map(|compensate| {
             compress_work(
@@ -534,31 +535,39 @@ fn search(
             )
         })
     };
-    let mut found: Vec<Clip> = Vec::new();
+    let mut found: Vec<(Clip, Option<Vec<f32>>)> = Vec::new();
     let times = source.times();
     let src = &*whole.points;
     if let Some(thin) = thinned(source, rig, src, tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
-        let holds = |c: &Clip| within(src, rig, c, times, &limits);
+        // The errors at every source time (time-major, one per joint), kept with the clip when
+        // each is within its joint's limit: they are the report's.
+        let holds = |c: Clip| {
+            let errors = errors_against(rig, src, &c, times);
+            let within = errors
+                .chunks(limits.len().max(1))
+                .all(|at| !at.iter().zip(&limits).any(|(&e, &l)| exceeds(e, l)));
+            within.then_some((c, Some(errors)))
+        };
         let reduced = tolerance * (1.0 - THINNING);
         let thin_sampled = Sampled::new(rig, &thin, thin.times());
-        found.extend(on(&thin, Some(&thin_sampled), reduced, options).filter(holds));
+        found.extend(on(&thin, Some(&thin_sampled), reduced, options).and_then(holds));
         if options.effort == Effort::Max {
             // The default's result on the thinned source too, so that `Max` is never larger.
             let default = CompressOptions {
                 effort: Effort::Default,
                 ..options.clone()
             };
-            found.extend(on(&thin, Some(&thin_sampled), reduced, &default).filter(holds));
+            found.extend(on(&thin, Some(&thin_sampled), reduced, &default).and_then(holds));
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
-        found.extend(on(source, Some(whole), tolerance, options));
+        found.extend(on(source, Some(whole), tolerance, options).map(|c| (c, None)));
     }
     // The smallest (the first of equals, in the order tried).
-    let mut best: Option<(usize, Clip)> = None;
+    let mut best: Option<(usize, (Clip, Option<Vec<f32>>))> = None;
     for c in found {
-        let size = clip_record_size(&c);
+        let size = clip_record_size(&c.0);
         if best.as_ref().is_none_or(|b| size < b.0) {
             best = Some((size, c));
         }
@@ -618,7 +627,7 @@ pub fn compress_clip(
         .error_distance
         .filter(|t| t.is_finite() && *t >= 0.0)
         .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
-    let mut best: Option<Clip> = None;
+    let mut best: Option<(Clip, Option<Vec<f32>>)> = None;
     let rig = Rig::new(&source, skeleton, distance);
     let whole = rig
         .as_ref()
@@ -627,16 +636,18 @@ pub fn compress_clip(
         best = search(&source, whole, rig, tolerance, skeleton.is_some(), options);
     }
     let plain_bytes = clip_record_size(&source);
-    let mut out = best.unwrap_or_else(|| source.clone());
+    let (mut out, mut measured) = best.unwrap_or_else(|| (source.clone(), None));
     if clip_record_size(&out) >= plain_bytes {
         out = source.clone();
+        measured = None;
     }
     let compressed_bytes = clip_record_size(&out);
     // The source's points are the ones the search measured against ([`measure`] computes them
     // the same way).
-    let mut errors = match &whole {
-        Some((rig, whole)) => errors_against(rig, &whole.points, &out, source.times()),
-        None => measure(&source, &out, skeleton, distance),
+    let mut errors = match (measured, &whole) {
+        (Some(errors), _) => errors,
+        (None, Some((rig, whole))) => errors_against(rig, &whole.points, &out, source.times()),
+        (None, None) => measure(&source, &out, skeleton, distance),
     };
     let max_error = errors.iter().copied().fold(0.0, f32::max);
     let p99_error = percentile(&mut errors, 0.99);

@@ -509,6 +509,9 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
     errors[i]
 }
 
+/// A result of [`search`]: the clip, and its errors at every source time when measured already.
+type Found = (Clip, Option<Vec<f32>>);
+
 /// The search on a source of thinned times first, then (when it found nothing that holds at every
 /// source time, or for `Max`) on the whole source; the smallest result, with its errors at every
 /// source time when they were measured already (a result of the thinned search: the check that it
@@ -520,7 +523,7 @@ fn search(
     tolerance: f32,
     bind_allowed: bool,
     options: &CompressOptions,
-) -> Option<(Clip, Option<Vec<f32>>)> {
+) -> Option<Found> {
     let on = |clip: &Clip, sampled: Option<&Sampled>, tolerance: f32, options: &CompressOptions| {
         [true, false].into_iter().find_map(|compensate| {
             compress_work(
@@ -535,7 +538,7 @@ fn search(
             )
         })
     };
-    let mut found: Vec<(Clip, Option<Vec<f32>>)> = Vec::new();
+    let mut found: Vec<Found> = Vec::new();
     let times = source.times();
     let src = &*whole.points;
     if let Some(thin) = thinned(source, rig, src, tolerance) {
@@ -565,7 +568,7 @@ fn search(
         found.extend(on(source, Some(whole), tolerance, options).map(|c| (c, None)));
     }
     // The smallest (the first of equals, in the order tried).
-    let mut best: Option<(usize, (Clip, Option<Vec<f32>>))> = None;
+    let mut best: Option<(usize, Found)> = None;
     for c in found {
         let size = clip_record_size(&c.0);
         if best.as_ref().is_none_or(|b| size < b.0) {
@@ -627,7 +630,7 @@ pub fn compress_clip(
         .error_distance
         .filter(|t| t.is_finite() && *t >= 0.0)
         .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
-    let mut best: Option<(Clip, Option<Vec<f32>>)> = None;
+    let mut best: Option<Found> = None;
     let rig = Rig::new(&source, skeleton, distance);
     let whole = rig
         .as_ref()

@@ -6,7 +6,8 @@
 //! (0.001 units at 0.1 units) inside a rayon pool of one thread (`SINEW_THREADS=N` for N); prints per
 //! clip the median and fastest time in milliseconds, the joints x keys, the compressed bytes and the
 //! max error. `SINEW_EFFORT=fast|max` picks another effort, `SINEW_SETTING=default` the default
-//! (relative) tolerance.
+//! (relative) tolerance. Like the `sinew` binary, it starts with [`sinew_pipeline::warm_heap`]
+//! unless `SINEW_NO_WARM_HEAP` is set.
 
 #![allow(clippy::unwrap_used)]
 
@@ -15,6 +16,10 @@ use sinew_pipeline::compress::{compress_clip, CompressOptions, Effort};
 use std::time::Instant;
 
 fn main() {
+    // The process the `sinew` binary runs the encoder in.
+    if std::env::var_os("SINEW_NO_WARM_HEAP").is_none() {
+        sinew_pipeline::warm_heap();
+    }
     let mut args = std::env::args().skip(1);
     let runs: usize = args.next().and_then(|r| r.parse().ok()).unwrap_or(5).max(1);
     let files: Vec<String> = args.collect();

@@ -21,3 +21,22 @@ pub mod texture;
 pub mod verify;
 
 pub use cut::{cut_clips, CutError};
+
+/// Allocates and frees one block of [`WARM_HEAP_BYTES`] without touching it, at the start of the
+/// process. With glibc's allocator this raises its mmap threshold to the block's size (and its trim
+/// threshold to twice that): the documented dynamic adjustment when a block it mapped is freed
+/// (mallopt(3), `M_MMAP_THRESHOLD`). Blocks below that size then come from the heap and are reused
+/// after they are freed, instead of being mapped and unmapped each time, so a process that builds
+/// and drops many states of a few hundred kilobytes (the clip encoder's) pays a page fault for
+/// each page once instead of on every reuse. The block itself is mapped and unmapped untouched (no
+/// page fault). With another allocator it is one allocation and nothing else
+/// (docs/performance.md, session 17). The `sinew` binary calls it first unless
+/// `SINEW_NO_WARM_HEAP` is set (for measuring), as does the encoder's timing example.
+pub fn warm_heap() {
+    drop(std::hint::black_box(Vec::<u8>::with_capacity(
+        WARM_HEAP_BYTES,
+    )));
+}
+
+/// The block of [`warm_heap`]: 16 MiB (glibc adjusts its threshold up to 32 MiB).
+pub const WARM_HEAP_BYTES: usize = 16 << 20;

@@ -60,7 +60,9 @@
 //!   times that read the segment, time by time as its keys are requantized, stopping at the first
 //!   time over the round's threshold (a failed try costs a fraction of a full one; the decision is
 //!   the one a whole pass would make); the time where a component's try last failed in a segment
-//!   is measured first next time. First-width checks likewise quantize keys as the times reach
+//!   is measured first next time, then the times where the joints it can move have their largest
+//!   errors in the segment (per segment and joint, kept up to date by the kept tries), up to four
+//!   times first in all. First-width checks likewise quantize keys as the times reach
 //!   them, and check first the time where the last failing check stopped (in this ladder or the
 //!   previous layout's).
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its

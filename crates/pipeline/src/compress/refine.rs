@@ -2,13 +2,20 @@
 //! segments of one parity worked on side by side.
 
 use super::eval::{Eval, SegmentState};
-use super::trial::Trial;
+use super::trial::{Trial, MAX_PROBES};
 use rayon::prelude::*;
 use std::sync::{Mutex, PoisonError};
 
 /// What refining one segment on a copy of the state gives back: the segment, what it wrote
-/// (`None` when nothing was kept), and its components' `blocked` and `probes` entries.
-type Refined = (usize, Option<SegmentState>, Vec<bool>, Vec<usize>);
+/// (`None` when nothing was kept), its components' `blocked` and `probes` entries, and its joints'
+/// `worst` entries.
+type Refined = (
+    usize,
+    Option<SegmentState>,
+    Vec<bool>,
+    Vec<usize>,
+    Vec<(f32, usize)>,
+);
 
 /// Rounds of one-bit reductions over every component of every segment. A reduction is kept when
 /// the error it gives, as a fraction of the limit, is within the round's threshold; thresholds
@@ -35,6 +42,12 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
     // failed try stopped (a time to measure first).
     let mut blocked = vec![false; nc * segs];
     let mut probes = vec![usize::MAX; nc * segs];
+    // Per segment, per joint: the largest ratio of error to limit at the segment's source times,
+    // and where (the first time tried of a component whose subtree has it). Kept up to date by
+    // the kept tries on the segment; a kept try on a neighbouring segment can change a shared
+    // time's error without updating it here, which only makes the guess worse.
+    let nj = eval.nj;
+    let mut worst = segment_worst(eval);
     let threads = rayon::current_num_threads();
     let side_by_side = par && threads > 1 && segs > 2;
     // Per thread of the pool: a copy of the state and a trial to refine segments in.
@@ -54,8 +67,8 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
         for parity in 0..2 {
             let segments: Vec<usize> = (parity..segs).step_by(2).collect();
             if side_by_side && segments.len() > 1 {
-                let (state, blocked_now, probes_now): (&Eval, &[bool], &[usize]) =
-                    (eval, &blocked, &probes);
+                let state: &Eval = eval;
+                let (blocked_now, probes_now, worst_now) = (&blocked[..], &probes[..], &worst[..]);
                 let done: Vec<Refined> = segments
                     .par_iter()
                     .map(|&s| {
@@ -65,15 +78,23 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
                         let own = s * nc..(s + 1) * nc;
                         let mut b = blocked_now[own.clone()].to_vec();
                         let mut p = probes_now[own].to_vec();
-                        let kept =
-                            refine_segment(copy, Some(state), trial, s, limit, &mut b, &mut p);
-                        (s, kept.then(|| copy.segment_state(s)), b, p)
+                        let mut w = worst_now[s * nj..(s + 1) * nj].to_vec();
+                        let kept = refine_segment(
+                            copy,
+                            Some(state),
+                            trial,
+                            s,
+                            limit,
+                            (&mut b, &mut p, &mut w),
+                        );
+                        (s, kept.then(|| copy.segment_state(s)), b, p, w)
                     })
                     .collect();
-                for (s, written, b, p) in done {
+                for (s, written, b, p, w) in done {
                     let own = s * nc..(s + 1) * nc;
                     blocked[own.clone()].copy_from_slice(&b);
                     probes[own].copy_from_slice(&p);
+                    worst[s * nj..(s + 1) * nj].copy_from_slice(&w);
                     if let Some(written) = written {
                         eval.store_segment(&written);
                         changed = true;
@@ -88,8 +109,11 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
                         &mut trial,
                         s,
                         limit,
-                        &mut blocked[own.clone()],
-                        &mut probes[own],
+                        (
+                            &mut blocked[own.clone()],
+                            &mut probes[own],
+                            &mut worst[s * nj..(s + 1) * nj],
+                        ),
                     );
                 }
             }
@@ -100,7 +124,7 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
     }
 }
 
-/// One round's tries on segment `s`, component by component (`blocked` and `probes`: the
+/// One round's tries on segment `s`, component by component (`blocked`, `probes` and `worst`: the
 /// segment's entries); true when one was kept. With `from`, `eval` is a copy of that state
 /// ([`Eval::empty_copy`]): the tries read `from` until one is kept, which first loads the
 /// segment's neighbourhood into the copy ([`Eval::load_segment`]), and the rest read and write the
@@ -111,8 +135,7 @@ fn refine_segment(
     trial: &mut Trial,
     s: usize,
     limit: f32,
-    blocked: &mut [bool],
-    probes: &mut [usize],
+    (blocked, probes, worst): (&mut [bool], &mut [usize], &mut [(f32, usize)]),
 ) -> bool {
     let nc = eval.layout.comps.len();
     let mut kept = false;
@@ -125,14 +148,35 @@ fn refine_segment(
         if current.bits[i] == 0 || *blocked {
             continue;
         }
-        let hint = (*probe != usize::MAX).then_some(*probe);
-        trial.run(current, s, c, current.bits[i] - 1, limit, hint);
+        // First where this try failed last, then the times where the state's error is largest
+        // over the joints it can move (each joint's worst time in the segment, largest first).
+        let j = current.joint[current.layout.comps[c].track];
+        let mut first = [(f32::INFINITY, *probe); MAX_PROBES];
+        let mut n = usize::from(*probe != usize::MAX);
+        for &d in &current.subtree[j] {
+            let (r, pos) = worst[d];
+            if r <= 0.0 || first[..n].iter().any(|f| f.1 == pos) {
+                continue;
+            }
+            // Insert by ratio, largest first, keeping at most MAX_PROBES.
+            let at = first[..n].iter().position(|f| f.0 < r).unwrap_or(n);
+            if at < MAX_PROBES {
+                first.copy_within(at..MAX_PROBES - 1, at + 1);
+                first[at] = (r, pos);
+                n = (n + 1).min(MAX_PROBES);
+            }
+        }
+        let probes: [usize; MAX_PROBES] = std::array::from_fn(|k| first[k].1);
+        trial.run(current, s, c, current.bits[i] - 1, limit, &probes[..n]);
         if trial.worst <= limit {
             if let Some(state) = from.filter(|_| !kept) {
                 eval.load_segment(state, s);
             }
             trial.commit(eval);
             kept = true;
+            for (d, r, pos) in trial.moved_worst() {
+                worst[d] = (r, pos);
+            }
         } else {
             *blocked = limit >= 1.0;
             if trial.failed_at != usize::MAX {
@@ -141,4 +185,23 @@ fn refine_segment(
         }
     }
     kept
+}
+
+/// Per segment, per joint: the largest ratio of error to limit over the segment's source times,
+/// and the time's position among them.
+fn segment_worst(eval: &Eval) -> Vec<(f32, usize)> {
+    let nj = eval.nj;
+    let mut worst = vec![(0.0f32, 0usize); eval.layout.seg_count * nj];
+    for (s, times) in eval.seg_times.iter().enumerate() {
+        for (pos, &i) in times.iter().enumerate() {
+            for j in 0..nj {
+                let r = eval.joint_error(i, j) / eval.ctx.limits[j];
+                let w = &mut worst[s * nj + j];
+                if r > w.0 {
+                    *w = (r, pos);
+                }
+            }
+        }
+    }
+    worst
 }

@@ -329,7 +329,7 @@ fn descend_one_at_a_time(eval: &mut Eval) {
                 if eval.bits[i] == 0 || blocked[i] {
                     continue;
                 }
-                trial.run(eval, s, c, eval.bits[i] - 1, limit, None);
+                trial.run(eval, s, c, eval.bits[i] - 1, limit, &[]);
                 if trial.worst <= limit {
                     trial.commit(eval);
                     changed = true;
@@ -417,7 +417,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
             c,
             e.bits[s * nc + c].saturating_sub(2),
             f32::INFINITY,
-            None,
+            &[],
         );
         t.worst.to_bits()
     };
@@ -433,7 +433,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
                 c1,
                 after.bits[s1 * nc + c1].saturating_sub(2),
                 f32::INFINITY,
-                None,
+                &[],
             );
             t.commit(&mut after);
             let before = Eval::new(&ctx, &layout, &work, bits.clone(), true);
@@ -471,6 +471,64 @@ fn a_refinement_spread_over_the_threads_compresses_to_the_same_bytes_at_any_thre
             assert_eq!(r.1, runs[0].1, "{keys} keys");
         }
     }
+}
+
+#[test]
+fn the_times_a_try_measures_first_change_neither_its_verdict_nor_what_it_commits() {
+    // Tries on every segment and on the root's, a middle joint's and the last joint's
+    // components, two bits down, at an infinite cap (the worst ratio, bit for bit) and at caps
+    // around it (the verdict), measured in time order and with the times measured first in
+    // reverse, repeated, out of range: the same result, and a kept try commits the same state.
+    let (source, rig) = moving_chain(5, 120);
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let layout = Layout::new(&work, &rig, 16, true);
+    let nc = layout.comps.len();
+    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true, &mut None).unwrap();
+    let state = Eval::new(&ctx, &layout, &work, bits, true);
+    let (mut kept, mut failed) = (0, 0);
+    for c in [0, 3, nc / 2, nc - 1] {
+        for s in 0..layout.seg_count {
+            let times = state.seg_times[s].len();
+            let bits = state.bits[s * nc + c].saturating_sub(2);
+            let orders: [Vec<usize>; 3] = [
+                Vec::new(),
+                (0..times).rev().collect(),
+                vec![times / 2, times + 7, times / 2, 0, times.saturating_sub(1)],
+            ];
+            let run = |order: &[usize], cap: f32| {
+                let mut t = super::trial::Trial::default();
+                t.run(&state, s, c, bits, cap, order);
+                let mut after = Eval::new(&ctx, &layout, &work, state.bits.clone(), true);
+                let worst = t.worst;
+                if worst <= cap {
+                    t.commit(&mut after);
+                }
+                (worst.to_bits(), after.qi, after.bits)
+            };
+            let (reference, ..) = run(&[], f32::INFINITY);
+            let worst = f32::from_bits(reference);
+            for cap in [f32::INFINITY, worst * 1.01, worst * 0.99, worst * 0.5] {
+                let plain = run(&[], cap);
+                if cap < worst {
+                    failed += 1;
+                } else {
+                    kept += 1;
+                }
+                for order in &orders {
+                    let with = run(order, cap);
+                    assert_eq!(with.1, plain.1, "segment {s} component {c} cap {cap}");
+                    assert_eq!(with.2, plain.2);
+                    if cap >= worst {
+                        assert_eq!(with.0, plain.0, "segment {s} component {c}");
+                    } else {
+                        assert_eq!(f32::from_bits(with.0), f32::INFINITY);
+                    }
+                }
+            }
+        }
+    }
+    assert!(kept > 0 && failed > 0, "{kept} kept, {failed} failed");
 }
 
 #[test]

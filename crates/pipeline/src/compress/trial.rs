@@ -20,6 +20,9 @@ use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::glam::{Affine3A, Quat, Vec3};
 use sinew_core::Transform;
 
+/// The most times a trial measures first ([`Trial::run`]'s `probes`).
+pub(super) const MAX_PROBES: usize = 4;
+
 /// "None" for the `usize` fields of a [`Row`].
 const NONE: usize = usize::MAX;
 
@@ -84,8 +87,10 @@ pub(super) struct Trial {
     /// Per subtree joint: its values changed / its model transforms changed.
     dirty: Vec<bool>,
     moved: Vec<bool>,
-    /// Per source time of the segment, per subtree joint: measured already.
+    /// Per source time of the segment, per subtree joint: measured already, and the ratio of its
+    /// error to its limit found then.
     seen: Vec<bool>,
+    ratio: Vec<f32>,
     /// The largest ratio of error to limit over the joints and times that changed, or infinity
     /// when one exceeded the cap (the trial then stopped there).
     pub(super) worst: f32,
@@ -97,8 +102,9 @@ pub(super) struct Trial {
 impl Trial {
     /// Works out setting component `c` of segment `s` to `bits` on `e` (see the module docs) and
     /// sets [`Trial::worst`]. As soon as one ratio exceeds `cap` it stops: `worst` is infinity.
-    /// `probe`: a time (position among the segment's source times) to measure first, where an
-    /// earlier trial of this component and segment failed; the result does not depend on it.
+    /// `probes`: times (positions among the segment's source times) to measure first, in order
+    /// (where an earlier trial of this component and segment failed, where the state's error is
+    /// largest); the result does not depend on them.
     ///
     /// The result is that of requantizing the whole segment and then measuring every time, every
     /// joint that moved (a joint whose values changed anywhere in the segment, or below one):
@@ -113,7 +119,7 @@ impl Trial {
         c: usize,
         bits: u8,
         cap: f32,
-        probe: Option<usize>,
+        probes: &[usize],
     ) {
         let keys = e.layout.seg_keys(s);
         let j = e.joint[e.layout.comps[c].track];
@@ -145,6 +151,7 @@ impl Trial {
         for f in [&mut self.local_set, &mut self.model_set, &mut self.seen] {
             reset(f, poses, false);
         }
+        grow(&mut self.ratio, poses, 0.0);
         reset(&mut self.dirty, self.nsub, false);
         reset(&mut self.moved, self.nsub, false);
         let nsub = self.nsub;
@@ -159,12 +166,21 @@ impl Trial {
                 .flatten()
                 .filter(|k| keys.contains(k))
         };
-        // The probe: the time where this component of this segment failed last, measured first
-        // with only the keys it reads. Its joints' values there are final (a key's quantization
-        // does not depend on other keys), so if it fails the trial fails; if it passes, the
-        // times are measured in order as usual, the probe's counting as measured.
-        let probe = probe.filter(|&p| p < times.len());
-        if let Some(p) = probe {
+        // The probes: times where this try is likely to fail (where this component of this
+        // segment failed last, where the state's error is largest), measured first with only the
+        // keys they read. Their joints' values there are final (a key's quantization does not
+        // depend on other keys), so if one fails the trial fails; if they pass, the times are
+        // measured in order as usual, the probes' counting as measured.
+        let mut first = [usize::MAX; MAX_PROBES];
+        let mut nprobes = 0;
+        for &p in probes {
+            if p < times.len() && nprobes < MAX_PROBES && !first[..nprobes].contains(&p) {
+                first[nprobes] = p;
+                nprobes += 1;
+            }
+        }
+        let probes = &first[..nprobes];
+        for &p in probes {
             let i = times[p];
             for k in reads(i) {
                 self.requantize_once(e, k);
@@ -187,7 +203,7 @@ impl Trial {
                 self.requantize_once(e, next);
                 next += 1;
             }
-            if probe == Some(pos) {
+            if probes.contains(&pos) {
                 continue;
             }
             match self.measure_time(e, pos, i, cap) {
@@ -214,6 +230,8 @@ impl Trial {
                     }
                     let m = self.model_of(e, pos, i, n, row.d);
                     let r = e.error_at(i, row.d, &m) / e.ctx.limits[row.d];
+                    self.seen[pos * nsub + n] = true;
+                    self.ratio[pos * nsub + n] = r;
                     if exceeds(r, cap) {
                         failed = true;
                         break 'late;
@@ -349,6 +367,7 @@ impl Trial {
             self.model_set[at] = true;
             self.seen[at] = true;
             let r = e.error_at(i, d, &m) / e.ctx.limits[d];
+            self.ratio[at] = r;
             if exceeds(r, cap) {
                 return None;
             }
@@ -426,6 +445,28 @@ impl Trial {
             }
         }
         e.seg_times[self.s] = times;
+    }
+
+    /// After a kept trial: per joint of the subtree whose errors it measured at every time of the
+    /// segment (the joints that moved), the largest ratio of error to limit and its time's
+    /// position. (A kept trial measures every time of a joint that moved.)
+    pub(super) fn moved_worst(&self) -> impl Iterator<Item = (usize, f32, usize)> + '_ {
+        let nsub = self.nsub;
+        let times = self.seen.len() / nsub.max(1);
+        self.rows
+            .iter()
+            .enumerate()
+            .filter(move |&(n, _)| self.moved[n])
+            .map(move |(n, row)| {
+                let mut best = (0.0f32, 0usize);
+                for pos in 0..times {
+                    let r = self.ratio[pos * nsub + n];
+                    if self.seen[pos * nsub + n] && r > best.0 {
+                        best = (r, pos);
+                    }
+                }
+                (row.d, best.0, best.1)
+            })
     }
 
     fn in_segment(&self, k: usize) -> Option<usize> {

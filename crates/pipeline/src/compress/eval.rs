@@ -153,12 +153,32 @@ pub(super) struct Eval<'a> {
     pub(super) first_time: usize,
 }
 
+/// Source times a first-width check measures first, most recent first: where the last checks
+/// failed, and where the last passing ones had their largest errors ([`Probes::add`]).
+pub(super) type Probes = [Option<usize>; PROBES];
+
+/// How many times [`Probes`] holds: a probe costs one time's poses, a check that fails late
+/// nearly a whole pass.
+pub(super) const PROBES: usize = 8;
+
+/// Puts time `i` first in `probes` (moving it up if it is there, else dropping the oldest).
+pub(super) fn add_probe(probes: &mut Probes, i: usize) {
+    let at = probes
+        .iter()
+        .position(|&p| p == Some(i))
+        .unwrap_or(PROBES - 1);
+    probes.copy_within(0..at, 1);
+    probes[0] = Some(i);
+}
+
 impl<'a> Eval<'a> {
     /// The state of `work` quantized with `bits`. With `check`, also whether every joint is within
     /// its limit at every source time: `Err(i)` names a source time `i` where one is not, and the
-    /// poses are then computed only up to there (the state is for the check alone). `probe`: a
-    /// source time to check first (where a previous check failed): its keys are quantized out of
-    /// order, which changes nothing, as a key's quantization reads no other key.
+    /// poses are then computed only up to there (the state is for the check alone); `Ok(i)` names
+    /// the source time where the largest ratio of a joint's error to its limit is (0 without the
+    /// check). `probes`: source times to check first (where a previous check failed, where a
+    /// previous passing one had its largest error): their keys are quantized out of order, which
+    /// changes nothing, as a key's quantization reads no other key.
     pub(super) fn build(
         ctx: &'a Ctx<'a>,
         layout: &'a Layout,
@@ -166,8 +186,8 @@ impl<'a> Eval<'a> {
         bits: Vec<u8>,
         compensate: bool,
         check: bool,
-        probe: Option<usize>,
-    ) -> (Eval<'a>, Result<(), usize>) {
+        probes: Probes,
+    ) -> (Eval<'a>, Result<usize, usize>) {
         let rig = ctx.rig;
         let nj = rig.skeleton.len();
         let parents = rig.skeleton.parents();
@@ -265,9 +285,23 @@ impl<'a> Eval<'a> {
             first_time: 0,
         };
         let seg_len = layout.seg_len.max(1);
-        let fails =
-            |e: &Eval, i: usize| (0..nj).any(|j| exceeds(e.joint_error(i, j), e.ctx.limits[j]));
-        if let Some(i) = probe.filter(|&i| check && i < e.at.len()) {
+        // The largest ratio of error to limit over the joints at time `i`, or `None` when one
+        // exceeds its limit.
+        let ratio = |e: &Eval, i: usize| {
+            let mut worst = 0.0f32;
+            for j in 0..nj {
+                let (error, limit) = (e.joint_error(i, j), e.ctx.limits[j]);
+                if exceeds(error, limit) {
+                    return None;
+                }
+                worst = worst.max(error / limit);
+            }
+            Some(worst)
+        };
+        for &i in probes.iter().flatten() {
+            if !check || i >= e.at.len() {
+                continue;
+            }
             let (k0, k1, a) = e.at[i];
             for k in [k0, k1]
                 .into_iter()
@@ -279,6 +313,7 @@ impl<'a> Eval<'a> {
                 return (e, Err(i));
             }
         }
+        let mut worst = (0.0f32, 0usize);
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
         let mut next = 0;
@@ -290,15 +325,19 @@ impl<'a> Eval<'a> {
                 next += 1;
             }
             e.resample(i);
-            if check && fails(&e, i) {
-                return (e, Err(i));
+            if check {
+                match ratio(&e, i) {
+                    None => return (e, Err(i)),
+                    Some(r) if r > worst.0 => worst = (r, i),
+                    Some(_) => {}
+                }
             }
         }
         while next < n {
             e.requantize_key(next / seg_len, next);
             next += 1;
         }
-        (e, Ok(()))
+        (e, Ok(worst.1))
     }
 
     /// [`Eval::build`] without the check.
@@ -309,7 +348,7 @@ impl<'a> Eval<'a> {
         bits: Vec<u8>,
         compensate: bool,
     ) -> Eval<'a> {
-        Eval::build(ctx, layout, work, bits, compensate, false, None).0
+        Eval::build(ctx, layout, work, bits, compensate, false, [None; PROBES]).0
     }
 
     pub(super) fn parent(&self, j: usize) -> Option<usize> {

@@ -1,6 +1,6 @@
 //! The per-clip search over key budgets, segment lengths and bit widths, and the entry point.
 
-use super::eval::{Ctx, Eval, Sampled};
+use super::eval::{add_probe, Ctx, Eval, Probes, Sampled, PROBES};
 use super::metric::{
     clip_extent, errors_against, exceeds, joint_limits, measure, skeleton_extent, within, Rig,
 };
@@ -36,11 +36,11 @@ fn map_in_order<T: Send, R: Send>(
 /// passing is monotone in the budget, as it nearly always is; the same widths are measured once);
 /// returns the budget, the widths and the stored integers they give (per component, per key).
 ///
-/// `probe`: the source time where the last failing check stopped (of this ladder or an earlier
-/// layout's), checked first by the next check; updated here. A check's verdict does not depend on
-/// the order of its times, so the answer is the same with any probe: it only makes failing checks
-/// stop sooner (the hardest pose of a clip is usually the same from one rung and layout to the
-/// next).
+/// `probe`: the source times where the last failing checks stopped and where the last passing
+/// ones had their largest errors (of this ladder or an earlier layout's), checked first by the
+/// next check; updated here. A check's verdict does not depend on the order of its times, so
+/// the answer is the same with any probes: they only make failing checks stop sooner (the hardest
+/// pose of a clip is usually the same from one rung and layout to the next).
 pub(super) fn first_state(
     ctx: &Ctx,
     layout: &Layout,
@@ -48,7 +48,7 @@ pub(super) fn first_state(
     start: f32,
     compensate: bool,
     par: bool,
-    probe: &mut Option<usize>,
+    probe: &mut Probes,
 ) -> Option<(f32, Vec<u8>, Vec<Vec<u32>>)> {
     first_eval(ctx, layout, work, start, compensate, par, probe).map(|(b, e)| (b, e.bits, e.qi))
 }
@@ -62,13 +62,13 @@ pub(super) fn first_eval<'a>(
     start: f32,
     compensate: bool,
     par: bool,
-    probe: &mut Option<usize>,
+    probe: &mut Probes,
 ) -> Option<(f32, Eval<'a>)> {
-    type Measured<'b> = Result<Eval<'b>, (Vec<u8>, usize)>;
-    let measure = |bits: Vec<u8>, probe: Option<usize>| -> Measured<'a> {
+    type Measured<'b> = Result<(Eval<'b>, usize), (Vec<u8>, usize)>;
+    let measure = |bits: Vec<u8>, probe: Probes| -> Measured<'a> {
         let (e, verdict) = Eval::build(ctx, layout, work, bits, compensate, true, probe);
         match verdict {
-            Ok(()) => Ok(e),
+            Ok(worst) => Ok((e, worst)),
             Err(i) => Err((e.bits, i)),
         }
     };
@@ -78,10 +78,13 @@ pub(super) fn first_eval<'a>(
     // only distinct widths are measured. The same verdicts, so the same result.
     let mut failed: Vec<Vec<u8>> = Vec::new();
     // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
-    let settle = |r: Measured<'a>, failed: &mut Vec<Vec<u8>>, probe: &mut Option<usize>| match r {
-        Ok(e) => Some(e),
+    let settle = |r: Measured<'a>, failed: &mut Vec<Vec<u8>>, probe: &mut Probes| match r {
+        Ok((e, worst)) => {
+            add_probe(probe, worst);
+            Some(e)
+        }
         Err((bits, i)) => {
-            *probe = Some(i);
+            add_probe(probe, i);
             failed.push(bits);
             None
         }
@@ -119,25 +122,23 @@ pub(super) fn first_eval<'a>(
         const TOP: u32 = 33;
         let rung = |k: u32| (0..k).fold(start, |b, _| b * step);
         // Whether rung `k` passes; a newly measured passing state replaces `lo_state`.
-        let passes = |k: u32,
-                      lo_state: &mut Eval<'a>,
-                      failed: &mut Vec<Vec<u8>>,
-                      probe: &mut Option<usize>| {
-            let bits = layout.first_bits(rung(k));
-            if bits == lo_state.bits {
-                return true;
-            }
-            if failed.contains(&bits) {
-                return false;
-            }
-            match settle(measure(bits, *probe), failed, probe) {
-                Some(e) => {
-                    *lo_state = e;
-                    true
+        let passes =
+            |k: u32, lo_state: &mut Eval<'a>, failed: &mut Vec<Vec<u8>>, probe: &mut Probes| {
+                let bits = layout.first_bits(rung(k));
+                if bits == lo_state.bits {
+                    return true;
                 }
-                None => false,
-            }
-        };
+                if failed.contains(&bits) {
+                    return false;
+                }
+                match settle(measure(bits, *probe), failed, probe) {
+                    Some(e) => {
+                        *lo_state = e;
+                        true
+                    }
+                    None => false,
+                }
+            };
         let mut lo = 1u32;
         let mut hi = None;
         let mut k = 2u32;
@@ -170,7 +171,7 @@ pub(super) fn first_eval<'a>(
         // starting from a budget far above its own, as after a work of little motion).
         const BOTTOM: u32 = 80;
         let rung = |k: u32| (0..k).fold(start, |b, _| b / step);
-        let check = |k: u32, failed: &mut Vec<Vec<u8>>, probe: &mut Option<usize>| {
+        let check = |k: u32, failed: &mut Vec<Vec<u8>>, probe: &mut Probes| {
             let bits = layout.first_bits(rung(k));
             if failed.contains(&bits) {
                 return None;
@@ -414,7 +415,7 @@ pub(super) fn estimated_candidates<'a>(
     // time, as a descent computes it); the next works' start where the one before ended.
     let mut start =
         (0..FIRST_RUNGS_DOWN).fold(tolerance, |b, _| b / std::f32::consts::SQRT_2.sqrt());
-    let mut probe = None;
+    let mut probe = [None; PROBES];
     let mut budget_of: Vec<Option<f32>> = vec![None; works.len()];
     for (li, (wi, layout, core)) in layouts.iter().enumerate() {
         if !core {
@@ -446,7 +447,7 @@ pub(super) fn estimated_candidates<'a>(
         match measured {
             Some(e) => Some((li, e)),
             None => {
-                let mut probe = None;
+                let mut probe = [None; PROBES];
                 first_eval(
                     ctx,
                     layout,
@@ -478,7 +479,7 @@ pub(super) fn exhaustive_candidates(
 ) -> Vec<(usize, Vec<u8>)> {
     let mut firsts: Vec<(usize, usize, Vec<u8>)> = Vec::new();
     let mut start = tolerance;
-    let mut probe = None;
+    let mut probe = [None; PROBES];
     for (li, (wi, layout, _)) in layouts.iter().enumerate() {
         let w = &works[*wi];
         let Some((budget, bits, _)) =

@@ -138,8 +138,16 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits, _) =
-            first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None).unwrap();
+        let (_, bits, _) = first_state(
+            &ctx,
+            &layout,
+            &work,
+            0.001,
+            compensate,
+            true,
+            &mut [None; PROBES],
+        )
+        .unwrap();
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e, true, &THRESHOLDS);
         assert!(
@@ -370,8 +378,16 @@ fn the_side_by_side_refinement_makes_the_decisions_of_one_try_at_a_time() {
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
         assert_eq!(layout.seg_count, 13);
-        let (_, bits, _) =
-            first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None).unwrap();
+        let (_, bits, _) = first_state(
+            &ctx,
+            &layout,
+            &work,
+            0.001,
+            compensate,
+            true,
+            &mut [None; PROBES],
+        )
+        .unwrap();
         let mut want = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend_one_at_a_time(&mut want);
         assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
@@ -408,7 +424,8 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     let segs = layout.seg_count;
     let nc = layout.comps.len();
     assert_eq!(segs, 8);
-    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true, &mut None).unwrap();
+    let (_, bits, _) =
+        first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
     let measure = |e: &Eval, s: usize, c: usize| -> u32 {
         let mut t = super::trial::Trial::default();
         t.run(
@@ -484,7 +501,8 @@ fn the_times_a_try_measures_first_change_neither_its_verdict_nor_what_it_commits
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     let layout = Layout::new(&work, &rig, 16, true);
     let nc = layout.comps.len();
-    let (_, bits, _) = first_state(&ctx, &layout, &work, 0.001, true, true, &mut None).unwrap();
+    let (_, bits, _) =
+        first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
     let state = Eval::new(&ctx, &layout, &work, bits, true);
     let (mut kept, mut failed) = (0, 0);
     for c in [0, 3, nc / 2, nc - 1] {
@@ -533,9 +551,9 @@ fn the_times_a_try_measures_first_change_neither_its_verdict_nor_what_it_commits
 
 #[test]
 fn a_probe_changes_no_first_width_verdict() {
-    // The same checks with no probe, with the failing time of a previous check as the probe, and
-    // with every other time as the probe: the same verdicts, and for passing widths the same
-    // stored integers; and the ladder reaches the same budget and widths.
+    // The same checks with no probes and with every time (and some out of range) as either probe
+    // or both: the same verdicts, and for passing widths the same stored integers and the same
+    // time of the largest error; and the ladder reaches the same budget and widths.
     let (source, rig) = swinging_chain();
     let work = Work::from_plain(&source);
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
@@ -555,14 +573,23 @@ fn a_probe_changes_no_first_width_verdict() {
                     true,
                     probe,
                 );
-                verdict.map(|()| e.qi)
+                verdict.map(|worst| (worst, e.qi))
             };
-            let plain = build(None);
+            let plain = build([None; PROBES]);
             match &plain {
                 Ok(_) => passed += 1,
                 Err(_) => failed += 1,
             }
-            for probe in (0..times).map(Some).chain([Some(times + 3)]) {
+            let probes = (0..=times + 3).flat_map(|p| {
+                let q = (times + 3 - p).min(times / 2);
+                let mut both = [None; PROBES];
+                add_probe(&mut both, q);
+                add_probe(&mut both, p);
+                let mut last = [None; PROBES];
+                last[PROBES - 1] = Some(p);
+                [both, last]
+            });
+            for probe in probes {
                 let with = build(probe);
                 assert_eq!(with.is_ok(), plain.is_ok(), "rung {rung} probe {probe:?}");
                 if let (Ok(a), Ok(b)) = (&with, &plain) {
@@ -570,8 +597,18 @@ fn a_probe_changes_no_first_width_verdict() {
                 }
             }
         }
-        let alone = first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut None);
-        let mut probe = Some(times / 2);
+        let alone = first_state(
+            &ctx,
+            &layout,
+            &work,
+            0.001,
+            compensate,
+            true,
+            &mut [None; PROBES],
+        );
+        let mut probe = [None; PROBES];
+        add_probe(&mut probe, times / 3);
+        add_probe(&mut probe, times / 2);
         let probed = first_state(&ctx, &layout, &work, 0.001, compensate, true, &mut probe);
         assert_eq!(alone, probed);
     }
@@ -600,7 +637,7 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
             layout.first_bits(budget),
             true,
             true,
-            None,
+            [None; PROBES],
         )
         .1
         .is_ok()
@@ -610,7 +647,15 @@ fn the_ladder_reaches_the_rung_a_rung_by_rung_climb_reaches() {
     for start in [
         1e-7f32, 1e-6, 1e-5, 1e-4, 5e-4, 7e-4, 0.001, 0.01, 1.0, 100.0,
     ] {
-        let got = first_state(&ctx, &layout, &work, start, true, false, &mut None);
+        let got = first_state(
+            &ctx,
+            &layout,
+            &work,
+            start,
+            true,
+            false,
+            &mut [None; PROBES],
+        );
         // Rung by rung.
         let mut budget = start;
         let expected = if passes(budget) {

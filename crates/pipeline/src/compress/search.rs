@@ -237,7 +237,8 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
     out
 }
 
-/// Steps 1 to 5 of the module docs; `None` when nothing met the limits.
+/// Steps 1 to 5 of the module docs: the result's record size and the result; `None` when nothing
+/// met the limits.
 ///
 /// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) is a work; each work
 /// has a layout per segment length of [`segment_candidates`]. [`estimated_candidates`] measures
@@ -255,7 +256,7 @@ pub(super) fn compress_work(
     bind_allowed: bool,
     options: &CompressOptions,
     compensate: bool,
-) -> Option<Clip> {
+) -> Option<(usize, Clip)> {
     if work.times.is_empty() {
         return None;
     }
@@ -390,7 +391,7 @@ pub(super) fn compress_work(
             best = Some((size, c));
         }
     }
-    best.map(|b| b.1)
+    best
 }
 
 /// The default search's candidates: per work, the first bit widths of its first layout are
@@ -510,8 +511,9 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
     errors[i]
 }
 
-/// A result of [`search`]: the clip, and its errors at every source time when measured already.
-type Found = (Clip, Option<Vec<f32>>);
+/// A result of [`search`]: its record size, the clip, and its errors at every source time when
+/// measured already.
+type Found = (usize, Clip, Option<Vec<f32>>);
 
 /// The search on a source of thinned times first, then (when it found nothing that holds at every
 /// source time, or for `Max`) on the whole source; the smallest result, with its errors at every
@@ -546,12 +548,12 @@ fn search(
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // The errors at every source time (time-major, one per joint), kept with the clip when
         // each is within its joint's limit: they are the report's.
-        let holds = |c: Clip| {
+        let holds = |(size, c): (usize, Clip)| {
             let errors = errors_against(rig, src, &c, times);
             let within = errors
                 .chunks(limits.len().max(1))
                 .all(|at| !at.iter().zip(&limits).any(|(&e, &l)| exceeds(e, l)));
-            within.then_some((c, Some(errors)))
+            within.then_some((size, c, Some(errors)))
         };
         let reduced = tolerance * (1.0 - THINNING);
         let thin_sampled = Sampled::new(rig, &thin, thin.times());
@@ -566,17 +568,16 @@ fn search(
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
-        found.extend(on(source, Some(whole), tolerance, options).map(|c| (c, None)));
+        found.extend(on(source, Some(whole), tolerance, options).map(|(n, c)| (n, c, None)));
     }
     // The smallest (the first of equals, in the order tried).
-    let mut best: Option<(usize, Found)> = None;
-    for c in found {
-        let size = clip_record_size(&c.0);
-        if best.as_ref().is_none_or(|b| size < b.0) {
-            best = Some((size, c));
+    let mut best: Option<Found> = None;
+    for f in found {
+        if best.as_ref().is_none_or(|b| f.0 < b.0) {
+            best = Some(f);
         }
     }
-    best.map(|b| b.1)
+    best
 }
 
 /// Fraction of the tolerance within which the thinned source of [`thinned`] follows the source
@@ -640,12 +641,10 @@ pub fn compress_clip(
         best = search(&source, whole, rig, tolerance, skeleton.is_some(), options);
     }
     let plain_bytes = clip_record_size(&source);
-    let (mut out, mut measured) = best.unwrap_or_else(|| (source.clone(), None));
-    if clip_record_size(&out) >= plain_bytes {
-        out = source.clone();
-        measured = None;
-    }
-    let compressed_bytes = clip_record_size(&out);
+    let (out, measured, compressed_bytes) = match best {
+        Some((size, clip, measured)) if size < plain_bytes => (clip, measured, size),
+        _ => (source.clone(), None, plain_bytes),
+    };
     // The source's points are the ones the search measured against ([`measure`] computes them
     // the same way).
     let mut errors = match (measured, &whole) {

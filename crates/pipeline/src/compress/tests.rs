@@ -80,6 +80,7 @@ fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool
         &mut work, &source, None, &rig, tolerance, true, &options, compensate,
     )
     .unwrap()
+    .1
 }
 
 #[test]

@@ -287,7 +287,7 @@ impl Rig {
 }
 
 /// Source times per chunk of a pass over a clip's times that runs side by side
-/// ([`Rig::poses`], [`within`]): a chunk's sampler then decodes each segment of a compressed
+/// ([`Rig::poses`], [`errors_against`]): a chunk's sampler then decodes each segment of a compressed
 /// clip about once.
 const TIMES_PER_CHUNK: usize = 64;
 
@@ -320,47 +320,43 @@ pub fn measure(
     )
 }
 
-/// [`measure`] with the source's error points at `times` already computed (`src`).
+/// [`measure`] with the source's error points at `times` already computed (`src`). Long clips are
+/// measured in chunks side by side ([`Rig::poses`]); the errors are the same.
 pub(super) fn errors_against(
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
     candidate: &Clip,
     times: &[f32],
 ) -> Vec<f32> {
-    let b = rig.all_points(&rig.poses(candidate, times));
-    src.iter()
-        .zip(&b)
-        .flat_map(|(x, y)| point_error(x, y).collect::<Vec<_>>())
-        .collect()
-}
-
-/// True when `clip`, sampled by the runtime at `times`, keeps every joint's error within its limit.
-/// Long clips are checked in chunks side by side ([`Rig::poses`]); the verdict is the same.
-pub(super) fn within(
-    src: &[Vec<[Vec3; 3]>],
-    rig: &Rig,
-    clip: &Clip,
-    times: &[f32],
-    limits: &[f32],
-) -> bool {
-    let holds = |first: usize, times: &[f32]| {
-        let mut ok = true;
-        runtime_points(rig, clip, times, |k, pts| {
-            ok = src
-                .get(first + k)
-                .is_some_and(|s| !point_error(s, pts).zip(limits).any(|(e, &l)| exceeds(e, l)));
-            !ok
+    let errors_of = |first: usize, times: &[f32]| {
+        let mut out = Vec::with_capacity(times.len() * rig.skeleton.len());
+        runtime_points(rig, candidate, times, |k, pts| match src.get(first + k) {
+            Some(s) => {
+                out.extend(point_error(s, pts));
+                false
+            }
+            None => true,
         });
-        ok
+        out
     };
     if rig.side_by_side(times.len()) {
-        times
+        let parts: Vec<Vec<f32>> = times
             .par_chunks(TIMES_PER_CHUNK)
             .enumerate()
-            .all(|(n, chunk)| holds(n * TIMES_PER_CHUNK, chunk))
+            .map(|(n, chunk)| errors_of(n * TIMES_PER_CHUNK, chunk))
+            .collect();
+        parts.concat()
     } else {
-        holds(0, times)
+        errors_of(0, times)
     }
+}
+
+/// True when every error of `errors` (time-major, one per joint, as [`errors_against`] gives them)
+/// is within its joint's limit.
+pub(super) fn within_limits(errors: &[f32], limits: &[f32]) -> bool {
+    errors
+        .chunks(limits.len().max(1))
+        .all(|at| !at.iter().zip(limits).any(|(&e, &l)| exceeds(e, l)))
 }
 
 /// Samples `clip` with the runtime's sampler at each of `times` (over the bind pose, or the identity

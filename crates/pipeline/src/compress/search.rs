@@ -2,7 +2,7 @@
 
 use super::eval::{add_probe, Ctx, Eval, Probes, Sampled, PROBES};
 use super::metric::{
-    clip_extent, errors_against, exceeds, joint_limits, measure, skeleton_extent, within, Rig,
+    clip_extent, errors_against, joint_limits, measure, skeleton_extent, within_limits, Rig,
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
@@ -237,8 +237,8 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
     out
 }
 
-/// Steps 1 to 5 of the module docs: the result's record size and the result; `None` when nothing
-/// met the limits.
+/// Steps 1 to 5 of the module docs: the result's record size, the result and its errors at the
+/// source's times (time-major, one per joint); `None` when nothing met the limits.
 ///
 /// Every key-reduction budget of [`KEY_BUDGETS`] (giving distinct kept keys) is a work; each work
 /// has a layout per segment length of [`segment_candidates`]. [`estimated_candidates`] measures
@@ -256,7 +256,7 @@ pub(super) fn compress_work(
     bind_allowed: bool,
     options: &CompressOptions,
     compensate: bool,
-) -> Option<(usize, Clip)> {
+) -> Option<Found> {
     if work.times.is_empty() {
         return None;
     }
@@ -363,7 +363,7 @@ pub(super) fn compress_work(
     // One refinement (`Fast` and `Default`) spreads its own tries over the threads; `Max`'s
     // several candidates are refined side by side instead.
     let alone = par && chosen.len() == 1;
-    let refined: Vec<Option<(usize, Clip)>> = map_in_order(chosen, par, |(li, start)| {
+    let refined: Vec<Option<Found>> = map_in_order(chosen, par, |(li, start)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
         let mut e = match start {
@@ -379,16 +379,15 @@ pub(super) fn compress_work(
             &THRESHOLDS
         };
         descend(&mut e, alone, thresholds);
-        [e.encode(w), before]
-            .into_iter()
-            .flatten()
-            .find(|c| within(src, rig, c, times, &ctx.limits))
-            .map(|c| (clip_record_size(&c), c))
+        [e.encode(w), before].into_iter().flatten().find_map(|c| {
+            let errors = errors_against(rig, src, &c, times);
+            within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
+        })
     });
-    let mut best: Option<(usize, Clip)> = None;
-    for (size, c) in refined.into_iter().flatten() {
-        if best.as_ref().is_none_or(|b| size < b.0) {
-            best = Some((size, c));
+    let mut best: Option<Found> = None;
+    for found in refined.into_iter().flatten() {
+        if best.as_ref().is_none_or(|b| found.0 < b.0) {
+            best = Some(found);
         }
     }
     best
@@ -511,14 +510,13 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
     errors[i]
 }
 
-/// A result of [`search`]: its record size, the clip, and its errors at every source time when
-/// measured already.
-type Found = (usize, Clip, Option<Vec<f32>>);
+/// A result of [`compress_work`] and [`search`]: its record size, the clip, and its errors at every
+/// time of the source it was searched on (time-major, one per joint).
+type Found = (usize, Clip, Vec<f32>);
 
 /// The search on a source of thinned times first, then (when it found nothing that holds at every
 /// source time, or for `Max`) on the whole source; the smallest result, with its errors at every
-/// source time when they were measured already (a result of the thinned search: the check that it
-/// holds measures them). `whole`: the source sampled at its times.
+/// source time. `whole`: the source sampled at its times.
 fn search(
     source: &Clip,
     whole: &Sampled,
@@ -546,14 +544,11 @@ fn search(
     let src = &*whole.points;
     if let Some(thin) = thinned(source, rig, src, tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
-        // The errors at every source time (time-major, one per joint), kept with the clip when
-        // each is within its joint's limit: they are the report's.
-        let holds = |(size, c): (usize, Clip)| {
+        // Its errors at every source time (those at the thinned times are the search's), kept
+        // with the clip when each is within its joint's limit: they are the report's.
+        let holds = |(size, c, _): Found| {
             let errors = errors_against(rig, src, &c, times);
-            let within = errors
-                .chunks(limits.len().max(1))
-                .all(|at| !at.iter().zip(&limits).any(|(&e, &l)| exceeds(e, l)));
-            within.then_some((size, c, Some(errors)))
+            within_limits(&errors, &limits).then_some((size, c, errors))
         };
         let reduced = tolerance * (1.0 - THINNING);
         let thin_sampled = Sampled::new(rig, &thin, thin.times());
@@ -568,7 +563,7 @@ fn search(
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
-        found.extend(on(source, Some(whole), tolerance, options).map(|(n, c)| (n, c, None)));
+        found.extend(on(source, Some(whole), tolerance, options));
     }
     // The smallest (the first of equals, in the order tried).
     let mut best: Option<Found> = None;
@@ -642,7 +637,7 @@ pub fn compress_clip(
     }
     let plain_bytes = clip_record_size(&source);
     let (out, measured, compressed_bytes) = match best {
-        Some((size, clip, measured)) if size < plain_bytes => (clip, measured, size),
+        Some((size, clip, errors)) if size < plain_bytes => (clip, Some(errors), size),
         _ => (source.clone(), None, plain_bytes),
     };
     // The source's points are the ones the search measured against ([`measure`] computes them

@@ -3,6 +3,7 @@
 use super::metric::{exceeds, joint_limits, Rig};
 use super::quantize::{locate, raw_rotation, Layout, Quant};
 use super::reduce::{WChan, Work};
+use rayon::prelude::*;
 use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::compressed::three_without;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -153,6 +154,24 @@ pub(super) struct Eval<'a> {
     pub(super) first_time: usize,
 }
 
+/// One key's quantized values, as [`Eval::key_into`] works them out: per component its stored
+/// integer and decoded value, per rotation its decoded value, per joint its model rotation.
+#[derive(Default)]
+struct KeyRow {
+    q: Vec<(u32, f32)>,
+    raw: Vec<Quat>,
+    rot: Vec<Quat>,
+}
+
+/// Joint-times from which [`Eval::build`] quantizes keys and computes times in chunks side by side
+/// (a long clip's passing check is a few milliseconds of work).
+const SIDE_BY_SIDE_BUILD: usize = 16 * 1024;
+/// Source times per block, keys and source times per chunk of a block, of [`Eval::build`]'s
+/// side-by-side passes.
+const TIMES_PER_BLOCK: usize = 256;
+const KEYS_PER_CHUNK: usize = 64;
+const TIMES_PER_CHUNK: usize = 64;
+
 /// Source times a first-width check measures first, most recent first: where the last checks
 /// failed, and where the last passing ones had their largest errors ([`Probes::add`]).
 pub(super) type Probes = [Option<usize>; PROBES];
@@ -298,6 +317,7 @@ impl<'a> Eval<'a> {
             }
             Some(worst)
         };
+        let mut row = KeyRow::default();
         for &i in probes.iter().flatten() {
             if !check || i >= e.at.len() {
                 continue;
@@ -307,11 +327,15 @@ impl<'a> Eval<'a> {
                 .into_iter()
                 .filter(|&k| k < n && (k == k0 || a != 0.0))
             {
-                e.requantize_key(k / seg_len, k);
+                e.requantize_key(k / seg_len, k, &mut row);
             }
             if e.probe_fails(i) {
                 return (e, Err(i));
             }
+        }
+        if e.at.len() * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+            let verdict = e.build_side_by_side(check);
+            return (e, verdict);
         }
         let mut worst = (0.0f32, 0usize);
         // Keys are quantized as the source times reach them (a check that fails early leaves the
@@ -321,7 +345,7 @@ impl<'a> Eval<'a> {
             let (k0, k1, a) = e.at[i];
             let need = if a != 0.0 { k0.max(k1) } else { k0 } + 1;
             while next < need.min(n) {
-                e.requantize_key(next / seg_len, next);
+                e.requantize_key(next / seg_len, next, &mut row);
                 next += 1;
             }
             e.resample(i);
@@ -334,10 +358,102 @@ impl<'a> Eval<'a> {
             }
         }
         while next < n {
-            e.requantize_key(next / seg_len, next);
+            e.requantize_key(next / seg_len, next, &mut row);
             next += 1;
         }
         (e, Ok(worst.1))
+    }
+
+    /// The rest of [`Eval::build`] for a long clip, a block of source times at a time: the keys
+    /// the block reads that are not quantized yet, in chunks side by side, then the block's
+    /// transforms (and with `check`, its errors), in chunks side by side; a check stops after the
+    /// first block where a joint is over its limit. The state is the one the sequential build
+    /// gives, value for value, and so is the verdict (its failing time may be another failing
+    /// one: it only serves as the next check's probe).
+    fn build_side_by_side(&mut self, check: bool) -> Result<usize, usize> {
+        let n = self.layout.keys;
+        let nj = self.nj.max(1);
+        let seg_len = self.layout.seg_len.max(1);
+        let times = self.at.len();
+        let mut next = 0;
+        let mut worst = (0.0f32, 0usize);
+        for t0 in (0..times).step_by(TIMES_PER_BLOCK) {
+            let t1 = (t0 + TIMES_PER_BLOCK).min(times);
+            let (k0, k1, a) = self.at[t1 - 1];
+            let need = (if a != 0.0 { k0.max(k1) } else { k0 } + 1).min(n);
+            let keys: Vec<usize> = (next..need).step_by(KEYS_PER_CHUNK).collect();
+            let rows: Vec<Vec<KeyRow>> = keys
+                .par_iter()
+                .map(|&k0| {
+                    (k0..(k0 + KEYS_PER_CHUNK).min(need))
+                        .map(|k| {
+                            let mut row = KeyRow::default();
+                            self.key_into(k / seg_len, k, &mut row);
+                            row
+                        })
+                        .collect()
+                })
+                .collect();
+            for (&k0, chunk) in keys.iter().zip(&rows) {
+                for (k, row) in (k0..).zip(chunk) {
+                    self.store_key(k, row);
+                }
+            }
+            next = next.max(need);
+            let mut local = std::mem::take(&mut self.local_aff);
+            let mut model = std::mem::take(&mut self.model);
+            local.resize(t1 * nj, Affine3A::IDENTITY);
+            model.resize(t1 * nj, Affine3A::IDENTITY);
+            let state: &Eval = self;
+            // Per chunk: its first failing time, or its first time of the largest ratio.
+            let found: Vec<Result<(f32, usize), usize>> = local[t0 * nj..]
+                .par_chunks_mut(TIMES_PER_CHUNK * nj)
+                .zip(model[t0 * nj..].par_chunks_mut(TIMES_PER_CHUNK * nj))
+                .enumerate()
+                .map(|(ci, (local, model))| {
+                    let mut worst = (0.0f32, 0usize);
+                    for (t, (local, model)) in
+                        local.chunks_mut(nj).zip(model.chunks_mut(nj)).enumerate()
+                    {
+                        let i = t0 + ci * TIMES_PER_CHUNK + t;
+                        let mut here = 0.0f32;
+                        for d in 0..state.nj {
+                            local[d] = state.local_pose(d, i).to_affine();
+                            let pm = state.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
+                            model[d] = pm * local[d];
+                            if check {
+                                let error = state.error_at(i, d, &model[d]);
+                                let limit = state.ctx.limits[d];
+                                if exceeds(error, limit) {
+                                    return Err(i);
+                                }
+                                here = here.max(error / limit);
+                            }
+                        }
+                        if here > worst.0 {
+                            worst = (here, i);
+                        }
+                    }
+                    Ok(worst)
+                })
+                .collect();
+            self.local_aff = local;
+            self.model = model;
+            for f in found {
+                match f {
+                    Err(i) => return Err(i),
+                    Ok(w) if w.0 > worst.0 => worst = w,
+                    Ok(_) => {}
+                }
+            }
+        }
+        while next < n {
+            let mut row = KeyRow::default();
+            self.key_into(next / seg_len, next, &mut row);
+            self.store_key(next, &row);
+            next += 1;
+        }
+        Ok(worst.1)
     }
 
     /// [`Eval::build`] without the check.
@@ -355,21 +471,29 @@ impl<'a> Eval<'a> {
         self.parents.get(j).copied().flatten()
     }
 
-    /// Quantizes key `k` of segment `s`: every component of every joint, parents first. (A change
-    /// of one component is worked out by [`super::trial::Trial`].)
-    pub(super) fn requantize_key(&mut self, s: usize, k: usize) {
+    /// Quantizes key `k` of segment `s`: every component of every joint, parents first (`row`:
+    /// scratch space). (A change of one component is worked out by [`super::trial::Trial`].)
+    fn requantize_key(&mut self, s: usize, k: usize, row: &mut KeyRow) {
+        self.key_into(s, k, row);
+        self.store_key(k, row);
+    }
+
+    /// Key `k` of segment `s` quantized into `row`: every component's stored integer and decoded
+    /// value, every rotation as decoded, every joint's model rotation (parents first).
+    fn key_into(&self, s: usize, k: usize, row: &mut KeyRow) {
         let nc = self.layout.comps.len();
+        row.q.resize(nc, (0, 0.0));
+        row.raw.resize(self.layout.index.len(), Quat::IDENTITY);
+        row.rot.resize(self.nj, Quat::IDENTITY);
         for d in 0..self.nj {
-            let pr = self.parent(d).map_or(Quat::IDENTITY, |p| {
-                self.key_rot[(k - self.first_key) * self.nj + p]
-            });
+            let pr = self.parent(d).map_or(Quat::IDENTITY, |p| row.rot[p]);
             let mut rot = self.base[d].rotation;
             if let Some(tr) = self.track_of[d] {
                 let [ft, fr, fs] = self.first[tr];
                 for c0 in [ft, fs].into_iter().flatten() {
                     for c in c0..c0 + 3 {
                         let v = self.layout.comps[c].vals[k];
-                        self.store(s, c, k, v, nc);
+                        row.q[c] = self.params[s * nc + c].quantize(v);
                     }
                 }
                 if let Some(c0) = fr {
@@ -377,16 +501,28 @@ impl<'a> Eval<'a> {
                     let index = self.layout.index[ri][k];
                     let vals = self.rotation_values(d, c0, k, pr);
                     for (a, v) in vals.into_iter().enumerate() {
-                        self.store(s, c0 + a, k, v, nc);
+                        row.q[c0 + a] = self.params[s * nc + c0 + a].quantize(v);
                     }
-                    let q = [0, 1, 2].map(|a| self.dec[c0 + a][k - self.first_key]);
-                    let raw = raw_rotation(index, q);
-                    self.raw[ri][k - self.first_key] = raw;
+                    let raw = raw_rotation(index, [0, 1, 2].map(|a| row.q[c0 + a].1));
+                    row.raw[ri] = raw;
                     rot = normalize_rotation(raw);
                 }
             }
-            self.key_rot[(k - self.first_key) * self.nj + d] = pr * rot;
+            row.rot[d] = pr * rot;
         }
+    }
+
+    /// Writes key `k`'s quantized values ([`Eval::key_into`]) into the state.
+    fn store_key(&mut self, k: usize, row: &KeyRow) {
+        let at = k - self.first_key;
+        for (c, &(q, x)) in row.q.iter().enumerate() {
+            self.qi[c][at] = q;
+            self.dec[c][at] = x;
+        }
+        for (ri, &raw) in row.raw.iter().enumerate() {
+            self.raw[ri][at] = raw;
+        }
+        self.key_rot[at * self.nj..(at + 1) * self.nj].copy_from_slice(&row.rot);
     }
 
     /// The three stored components of joint `d`'s rotation (first component `c0`) at key `k`,
@@ -401,13 +537,6 @@ impl<'a> Eval<'a> {
             }
             _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
         }
-    }
-
-    /// Quantizes `v` as component `c` of key `k` (in segment `s`).
-    pub(super) fn store(&mut self, s: usize, c: usize, k: usize, v: f32, nc: usize) {
-        let (q, x) = self.params[s * nc + c].quantize(v);
-        self.qi[c][k - self.first_key] = q;
-        self.dec[c][k - self.first_key] = x;
     }
 
     /// Computes every joint's local pose and model transform at source time `i` (parents first).

@@ -370,6 +370,88 @@ fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
 }
 
 #[test]
+fn a_long_clip_builds_side_by_side_the_state_and_verdict_of_one_thread() {
+    // 6 joints x 3,000 keys: above the volume from which `Eval::build` quantizes keys and
+    // computes times in chunks side by side (more than one block of times). On one thread it
+    // builds time by time; on two and three, block by block: the same state, value for value,
+    // and the same verdicts, for widths that pass, that fail early and that fail late.
+    let (source, rig) = moving_chain(6, 3000);
+    assert!(source.times().len() * rig.skeleton.len() >= 16 * 1024);
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let layout = Layout::new(&work, &rig, 16, true);
+    let (budget, bits, _) =
+        first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
+    let step = std::f32::consts::SQRT_2.sqrt();
+    let mut failing = bits.clone();
+    // Every width of the last segment one bit down: a check that fails late.
+    let nc = layout.comps.len();
+    for w in &mut failing[(layout.seg_count - 1) * nc..] {
+        *w = w.saturating_sub(3);
+    }
+    let widths = [
+        bits.clone(),
+        layout.first_bits(budget * step.powi(4)),
+        failing,
+    ];
+    let build = |threads: usize, bits: &Vec<u8>, check: bool| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let (e, verdict) = Eval::build(
+                &ctx,
+                &layout,
+                &work,
+                bits.clone(),
+                true,
+                check,
+                [None; PROBES],
+            );
+            let state = (
+                e.qi.clone(),
+                e.dec
+                    .iter()
+                    .map(|d| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                    .collect::<Vec<_>>(),
+                e.key_rot
+                    .iter()
+                    .map(|q| q.to_array().map(f32::to_bits))
+                    .collect::<Vec<_>>(),
+                e.model
+                    .iter()
+                    .map(|m| m.to_cols_array().map(f32::to_bits))
+                    .collect::<Vec<_>>(),
+            );
+            (state, verdict.is_ok(), verdict.ok())
+        })
+    };
+    let mut verdicts = Vec::new();
+    for bits in &widths {
+        for check in [false, true] {
+            let one = build(1, bits, check);
+            for threads in [2, 3] {
+                let many = build(threads, bits, check);
+                assert_eq!(one.1, many.1, "verdict, {threads} threads");
+                assert_eq!(
+                    one.2, many.2,
+                    "time of the largest error, {threads} threads"
+                );
+                if one.1 {
+                    assert_eq!(one.0, many.0, "state, {threads} threads");
+                }
+            }
+            if check {
+                verdicts.push(one.1);
+            }
+        }
+    }
+    // Passing and failing widths both occur, so the comparison can tell.
+    assert_eq!(verdicts, [true, false, false]);
+}
+
+#[test]
 fn the_side_by_side_refinement_makes_the_decisions_of_one_try_at_a_time() {
     // Six joints whose root also moves, 200 keys: 13 segments of 16, so that each parity holds
     // several segments (translations and rotations, whole subtrees under compensation).

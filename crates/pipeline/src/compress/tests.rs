@@ -16,7 +16,7 @@ use sinew_core::{Clip, Skeleton, Transform};
 use sinew_core::{Curve, JointDesc, TrackCurves};
 
 /// A chain of `n` joints, `bone` units apart along y.
-fn chain(n: usize, bone: f32) -> Skeleton {
+pub(super) fn chain(n: usize, bone: f32) -> Skeleton {
     let joints = (0..n)
         .map(|i| JointDesc {
             name: format!("j{i}"),
@@ -34,7 +34,7 @@ fn swing(skeleton: &Skeleton, keys: usize) -> Clip {
 }
 
 /// [`swing`], with the root also moving (`moving`).
-fn swing_moving(skeleton: &Skeleton, keys: usize, moving: bool) -> Clip {
+pub(super) fn swing_moving(skeleton: &Skeleton, keys: usize, moving: bool) -> Clip {
     let times: Vec<f32> = (0..keys).map(|k| k as f32 / 30.0).collect();
     let tracks = skeleton
         .names()

@@ -86,6 +86,8 @@ mod metric;
 mod options;
 mod quantize;
 mod reduce;
+#[cfg(test)]
+mod reduce_tests;
 mod refine;
 mod search;
 #[cfg(test)]

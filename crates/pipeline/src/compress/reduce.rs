@@ -227,7 +227,8 @@ pub(super) fn simplify_channels(
             // reproduces it (sources often key every joint, most at its rest value): a bind
             // channel costs nothing beyond its track's kind byte, a constant 12 or 16 bytes.
             // The bind value itself (or the same rotation, negated) changes nothing and needs
-            // no measurement, which on files that key every channel is most of them.
+            // no measurement, nor any update of the state, which on files that key every channel
+            // is most of them.
             let mut exact: Option<WTrack> = None;
             match ch {
                 0 if matches!(tr.t, WChan::Constant(_)) && d.is_some() => {
@@ -289,22 +290,14 @@ pub(super) fn simplify_channels(
                 }
             }
             if let Some(t) = exact {
-                if state.try_track(rig, like, src, src_times, joint, &work.times, &t, None) {
-                    work.tracks[i] = t;
-                }
+                // The same value (a rotation possibly negated, which gives the same matrix, bit
+                // for bit: its entries are products of two components): every local and model
+                // transform of the state stays as it is.
+                work.tracks[i] = t;
                 continue;
             }
             for t in candidates {
-                if state.try_track(
-                    rig,
-                    like,
-                    src,
-                    src_times,
-                    joint,
-                    &work.times,
-                    &t,
-                    Some(budget),
-                ) {
+                if state.try_track(rig, like, src, src_times, joint, &work.times, &t, budget) {
                     work.tracks[i] = t;
                     break;
                 }
@@ -350,7 +343,7 @@ impl<'a> SubtreeState<'a> {
     }
 
     /// Whether `track` (for `joint`) in place of the work's keeps every error of the joint's
-    /// subtree within `budget` (always, for `None`); if so the state takes it.
+    /// subtree within `budget`; if so the state takes it.
     #[allow(clippy::too_many_arguments)]
     fn try_track(
         &mut self,
@@ -361,7 +354,7 @@ impl<'a> SubtreeState<'a> {
         joint: usize,
         key_times: &[f32],
         track: &WTrack,
-        budget: Option<f32>,
+        budget: f32,
     ) -> bool {
         let one = Work {
             times: key_times.to_vec(),
@@ -397,13 +390,11 @@ impl<'a> SubtreeState<'a> {
                     None => a,
                 };
                 new_model.push(m);
-                if let Some(limit) = budget {
-                    let pts = rig.points[d].map(|x| m.transform_point3(x));
-                    let e = point_error(&src[k][d..=d], std::slice::from_ref(&pts))
-                        .fold(0.0f32, f32::max);
-                    if e > limit {
-                        return false;
-                    }
+                let pts = rig.points[d].map(|x| m.transform_point3(x));
+                let e =
+                    point_error(&src[k][d..=d], std::slice::from_ref(&pts)).fold(0.0f32, f32::max);
+                if e > budget {
+                    return false;
                 }
             }
             new_local.push(pose[joint]);
@@ -482,82 +473,4 @@ pub(super) fn reduce_keys(
         a = b;
     }
     kept
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::compress::tests::{chain, swing_moving};
-
-    /// [`reduce_keys`] as it was written before it stopped at the first joint over the budget:
-    /// every joint's interpolated pose, its error points, then the errors.
-    fn reduce_keys_whole_poses(
-        work: &Work,
-        like: &Clip,
-        rig: &Rig,
-        src: &[Vec<[Vec3; 3]>],
-        budget: f32,
-    ) -> Vec<usize> {
-        let n = work.times.len();
-        let plain = work.plain(like).unwrap();
-        let poses = rig.poses(&plain, &work.times);
-        let (mut m, mut pts) = (Vec::new(), Vec::new());
-        let mut lerped = poses[0].clone();
-        let mut ok = |a: usize, b: usize| -> bool {
-            let (ta, tb) = (work.times[a], work.times[b]);
-            for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
-                let x = (work.times[k] - ta) / (tb - ta);
-                for (j, out) in lerped.iter_mut().enumerate() {
-                    let (p, q) = (poses[a][j], poses[b][j]);
-                    *out = Transform {
-                        translation: p.translation.lerp(q.translation, x),
-                        rotation: nlerp(p.rotation, q.rotation, x),
-                        scale: p.scale.lerp(q.scale, x),
-                    };
-                }
-                rig.points_of(&lerped, &mut m, &mut pts);
-                if point_error(src_k, &pts).any(|e| e > budget) {
-                    return false;
-                }
-            }
-            true
-        };
-        let mut kept = vec![0];
-        let mut a = 0;
-        while a + 1 < n {
-            let mut b = a + 1;
-            while b + 1 < n && b + 1 - a <= 128 && ok(a, b + 1) {
-                b += 1;
-            }
-            kept.push(b);
-            a = b;
-        }
-        kept
-    }
-
-    #[test]
-    fn stopping_at_the_first_joint_over_the_budget_keeps_the_same_keys() {
-        // Chains of 3 and 7 joints, moving and not, over budgets from a few ulps of motion to
-        // more than the motion: the same kept keys as measuring every joint first, and budgets
-        // where few and where most keys are kept, so the comparison can tell.
-        let mut kept_counts = Vec::new();
-        for (joints, moving) in [(3, false), (7, true)] {
-            let skeleton = chain(joints, 0.4);
-            let source = swing_moving(&skeleton, 90, moving).to_plain();
-            let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
-            let src = rig.all_points(&rig.poses(&source, source.times()));
-            let work = Work::from_plain(&source);
-            for budget in [1e-6, 1e-4, 1e-3, 1e-2, 0.1] {
-                let kept = reduce_keys(&work, &source, &rig, &src, budget);
-                assert_eq!(
-                    kept,
-                    reduce_keys_whole_poses(&work, &source, &rig, &src, budget),
-                    "{joints} joints, budget {budget}"
-                );
-                kept_counts.push(kept.len());
-            }
-        }
-        assert!(kept_counts.iter().any(|&k| k <= 10), "{kept_counts:?}");
-        assert!(kept_counts.iter().any(|&k| k >= 60), "{kept_counts:?}");
-    }
 }

@@ -430,7 +430,7 @@ pub(super) fn reduce_keys(
     // Whether interpolating between keys `a` and `b` keeps every time between them within the
     // budget. Joint by joint, parents first (the forward kinematics and points of
     // [`Rig::points_of`], the errors of [`point_error`]), stopping at the first joint over it.
-    let mut ok = |a: usize, b: usize| -> bool {
+    let ok = |a: usize, b: usize| -> bool {
         let (ta, tb) = (work.times[a], work.times[b]);
         for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
             let x = (work.times[k] - ta) / (tb - ta);
@@ -462,6 +462,12 @@ pub(super) fn reduce_keys(
         }
         true
     };
+    greedy_keys(n, ok)
+}
+
+/// The keys kept by extending each span from the last kept key while `ok(first, last)` holds
+/// (at most 128 keys a span): the greedy part of [`reduce_keys`].
+pub(super) fn greedy_keys(n: usize, mut ok: impl FnMut(usize, usize) -> bool) -> Vec<usize> {
     let mut kept = vec![0];
     let mut a = 0;
     while a + 1 < n {

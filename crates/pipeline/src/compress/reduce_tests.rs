@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 use super::metric::{point_error, Rig};
-use super::reduce::{reduce_keys, Work};
+use super::reduce::{greedy_keys, reduce_keys, Work};
 use super::tests::{chain, swing_moving};
 use sinew_core::clip::nlerp;
 use sinew_core::glam::Vec3;
@@ -23,7 +23,7 @@ fn reduce_keys_whole_poses(
     let poses = rig.poses(&plain, &work.times);
     let (mut m, mut pts) = (Vec::new(), Vec::new());
     let mut lerped = poses[0].clone();
-    let mut ok = |a: usize, b: usize| -> bool {
+    let ok = |a: usize, b: usize| -> bool {
         let (ta, tb) = (work.times[a], work.times[b]);
         for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
             let x = (work.times[k] - ta) / (tb - ta);
@@ -42,17 +42,7 @@ fn reduce_keys_whole_poses(
         }
         true
     };
-    let mut kept = vec![0];
-    let mut a = 0;
-    while a + 1 < n {
-        let mut b = a + 1;
-        while b + 1 < n && b + 1 - a <= 128 && ok(a, b + 1) {
-            b += 1;
-        }
-        kept.push(b);
-        a = b;
-    }
-    kept
+    greedy_keys(n, ok)
 }
 
 #[test]

@@ -15,6 +15,21 @@ use sinew_core::{Clip, Skeleton, Transform};
 
 use sinew_core::{Curve, JointDesc, TrackCurves};
 
+/// The first widths of `layout` from the peers' tolerance, checked (with no probes).
+fn first_widths(ctx: &Ctx, layout: &Layout, work: &Work, compensate: bool) -> Vec<u8> {
+    first_state(
+        ctx,
+        layout,
+        work,
+        0.001,
+        compensate,
+        true,
+        &mut [None; PROBES],
+    )
+    .unwrap()
+    .1
+}
+
 /// A chain of `n` joints, `bone` units apart along y.
 pub(super) fn chain(n: usize, bone: f32) -> Skeleton {
     let joints = (0..n)
@@ -139,16 +154,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
-        let (_, bits, _) = first_state(
-            &ctx,
-            &layout,
-            &work,
-            0.001,
-            compensate,
-            true,
-            &mut [None; PROBES],
-        )
-        .unwrap();
+        let bits = first_widths(&ctx, &layout, &work, compensate);
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend(&mut e, true, &THRESHOLDS);
         assert!(
@@ -461,16 +467,7 @@ fn the_side_by_side_refinement_makes_the_decisions_of_one_try_at_a_time() {
     for compensate in [true, false] {
         let layout = Layout::new(&work, &rig, 16, compensate);
         assert_eq!(layout.seg_count, 13);
-        let (_, bits, _) = first_state(
-            &ctx,
-            &layout,
-            &work,
-            0.001,
-            compensate,
-            true,
-            &mut [None; PROBES],
-        )
-        .unwrap();
+        let bits = first_widths(&ctx, &layout, &work, compensate);
         let mut want = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend_one_at_a_time(&mut want);
         assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
@@ -507,8 +504,7 @@ fn tries_two_segments_apart_do_not_see_each_other() {
     let segs = layout.seg_count;
     let nc = layout.comps.len();
     assert_eq!(segs, 8);
-    let (_, bits, _) =
-        first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
+    let bits = first_widths(&ctx, &layout, &work, true);
     let measure = |e: &Eval, s: usize, c: usize| -> u32 {
         let mut t = super::trial::Trial::default();
         t.run(
@@ -584,8 +580,7 @@ fn the_times_a_try_measures_first_change_neither_its_verdict_nor_what_it_commits
     let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
     let layout = Layout::new(&work, &rig, 16, true);
     let nc = layout.comps.len();
-    let (_, bits, _) =
-        first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
+    let bits = first_widths(&ctx, &layout, &work, true);
     let state = Eval::new(&ctx, &layout, &work, bits, true);
     let (mut kept, mut failed) = (0, 0);
     for c in [0, 3, nc / 2, nc - 1] {

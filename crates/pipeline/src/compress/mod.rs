@@ -63,8 +63,8 @@
 //!   is measured first next time, then the times where the joints it can move have their largest
 //!   errors in the segment (per segment and joint, kept up to date by the kept tries), up to four
 //!   times first in all. First-width checks likewise quantize keys as the times reach
-//!   them, and check first the time where the last failing check stopped (in this ladder or the
-//!   previous layout's).
+//!   them, and check first up to eight recent times where checks failed or passing ones had
+//!   their largest error (in this ladder or the previous layouts').
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and `Max`'s refinements of several
 //!   candidates; a long clip's state (from 16,384 joint-times) is built a block of 256 source times

@@ -173,7 +173,7 @@ const KEYS_PER_CHUNK: usize = 64;
 const TIMES_PER_CHUNK: usize = 64;
 
 /// Source times a first-width check measures first, most recent first: where the last checks
-/// failed, and where the last passing ones had their largest errors ([`Probes::add`]).
+/// failed, and where the last passing ones had their largest errors ([`add_probe`]).
 pub(super) type Probes = [Option<usize>; PROBES];
 
 /// How many times [`Probes`] holds: a probe costs one time's poses, a check that fails late
@@ -303,20 +303,6 @@ impl<'a> Eval<'a> {
             first_key: 0,
             first_time: 0,
         };
-        let seg_len = layout.seg_len.max(1);
-        // The largest ratio of error to limit over the joints at time `i`, or `None` when one
-        // exceeds its limit.
-        let ratio = |e: &Eval, i: usize| {
-            let mut worst = 0.0f32;
-            for j in 0..nj {
-                let (error, limit) = (e.joint_error(i, j), e.ctx.limits[j]);
-                if exceeds(error, limit) {
-                    return None;
-                }
-                worst = worst.max(error / limit);
-            }
-            Some(worst)
-        };
         let mut row = KeyRow::default();
         for &i in probes.iter().flatten() {
             if !check || i >= e.at.len() {
@@ -327,7 +313,7 @@ impl<'a> Eval<'a> {
                 .into_iter()
                 .filter(|&k| k < n && (k == k0 || a != 0.0))
             {
-                e.requantize_key(k / seg_len, k, &mut row);
+                e.requantize_key(k, &mut row);
             }
             if e.probe_fails(i) {
                 return (e, Err(i));
@@ -342,25 +328,20 @@ impl<'a> Eval<'a> {
         // rest undone); every key is quantized in key order, as a whole pass would.
         let mut next = 0;
         for i in 0..e.at.len() {
-            let (k0, k1, a) = e.at[i];
-            let need = if a != 0.0 { k0.max(k1) } else { k0 } + 1;
-            while next < need.min(n) {
-                e.requantize_key(next / seg_len, next, &mut row);
-                next += 1;
-            }
+            let need = e.keys_read_before(i);
+            e.requantize_keys(next..need, &mut row);
+            next = next.max(need);
             e.resample(i);
             if check {
-                match ratio(&e, i) {
+                let at = (i - e.first_time) * nj;
+                match e.time_ratio(i, &e.model[at..at + nj]) {
                     None => return (e, Err(i)),
                     Some(r) if r > worst.0 => worst = (r, i),
                     Some(_) => {}
                 }
             }
         }
-        while next < n {
-            e.requantize_key(next / seg_len, next, &mut row);
-            next += 1;
-        }
+        e.requantize_keys(next..n, &mut row);
         (e, Ok(worst.1))
     }
 
@@ -373,14 +354,12 @@ impl<'a> Eval<'a> {
     fn build_side_by_side(&mut self, check: bool) -> Result<usize, usize> {
         let n = self.layout.keys;
         let nj = self.nj.max(1);
-        let seg_len = self.layout.seg_len.max(1);
         let times = self.at.len();
         let mut next = 0;
         let mut worst = (0.0f32, 0usize);
         for t0 in (0..times).step_by(TIMES_PER_BLOCK) {
             let t1 = (t0 + TIMES_PER_BLOCK).min(times);
-            let (k0, k1, a) = self.at[t1 - 1];
-            let need = (if a != 0.0 { k0.max(k1) } else { k0 } + 1).min(n);
+            let need = self.keys_read_before(t1 - 1);
             let keys: Vec<usize> = (next..need).step_by(KEYS_PER_CHUNK).collect();
             let rows: Vec<Vec<KeyRow>> = keys
                 .par_iter()
@@ -388,7 +367,7 @@ impl<'a> Eval<'a> {
                     (k0..(k0 + KEYS_PER_CHUNK).min(need))
                         .map(|k| {
                             let mut row = KeyRow::default();
-                            self.key_into(k / seg_len, k, &mut row);
+                            self.key_into(k, &mut row);
                             row
                         })
                         .collect()
@@ -416,22 +395,13 @@ impl<'a> Eval<'a> {
                         local.chunks_mut(nj).zip(model.chunks_mut(nj)).enumerate()
                     {
                         let i = t0 + ci * TIMES_PER_CHUNK + t;
-                        let mut here = 0.0f32;
-                        for d in 0..state.nj {
-                            local[d] = state.local_pose(d, i).to_affine();
-                            let pm = state.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
-                            model[d] = pm * local[d];
-                            if check {
-                                let error = state.error_at(i, d, &model[d]);
-                                let limit = state.ctx.limits[d];
-                                if exceeds(error, limit) {
-                                    return Err(i);
-                                }
-                                here = here.max(error / limit);
+                        state.pose_into(i, local, model);
+                        if check {
+                            match state.time_ratio(i, model) {
+                                None => return Err(i),
+                                Some(r) if r > worst.0 => worst = (r, i),
+                                Some(_) => {}
                             }
-                        }
-                        if here > worst.0 {
-                            worst = (here, i);
                         }
                     }
                     Ok(worst)
@@ -447,12 +417,7 @@ impl<'a> Eval<'a> {
                 }
             }
         }
-        while next < n {
-            let mut row = KeyRow::default();
-            self.key_into(next / seg_len, next, &mut row);
-            self.store_key(next, &row);
-            next += 1;
-        }
+        self.requantize_keys(next..n, &mut KeyRow::default());
         Ok(worst.1)
     }
 
@@ -471,16 +436,31 @@ impl<'a> Eval<'a> {
         self.parents.get(j).copied().flatten()
     }
 
-    /// Quantizes key `k` of segment `s`: every component of every joint, parents first (`row`:
-    /// scratch space). (A change of one component is worked out by [`super::trial::Trial`].)
-    fn requantize_key(&mut self, s: usize, k: usize, row: &mut KeyRow) {
-        self.key_into(s, k, row);
+    /// Quantizes key `k`: every component of every joint, parents first (`row`: scratch space).
+    /// (A change of one component is worked out by [`super::trial::Trial`].)
+    fn requantize_key(&mut self, k: usize, row: &mut KeyRow) {
+        self.key_into(k, row);
         self.store_key(k, row);
     }
 
-    /// Key `k` of segment `s` quantized into `row`: every component's stored integer and decoded
-    /// value, every rotation as decoded, every joint's model rotation (parents first).
-    fn key_into(&self, s: usize, k: usize, row: &mut KeyRow) {
+    /// [`Eval::requantize_key`] for each of `keys`, in order.
+    fn requantize_keys(&mut self, keys: std::ops::Range<usize>, row: &mut KeyRow) {
+        for k in keys {
+            self.requantize_key(k, row);
+        }
+    }
+
+    /// One past the last key source time `i` reads (at most the key count): the keys that must
+    /// be quantized before it is computed.
+    fn keys_read_before(&self, i: usize) -> usize {
+        let (k0, k1, a) = self.at[i];
+        (if a != 0.0 { k0.max(k1) } else { k0 } + 1).min(self.layout.keys)
+    }
+
+    /// Key `k` quantized into `row`: every component's stored integer and decoded value, every
+    /// rotation as decoded, every joint's model rotation (parents first).
+    fn key_into(&self, k: usize, row: &mut KeyRow) {
+        let s = k / self.layout.seg_len.max(1);
         let nc = self.layout.comps.len();
         row.q.resize(nc, (0, 0.0));
         row.raw.resize(self.layout.index.len(), Quat::IDENTITY);
@@ -542,38 +522,52 @@ impl<'a> Eval<'a> {
     /// Computes every joint's local pose and model transform at source time `i` (parents first).
     /// While the state is being built, the times are computed in order and each one's transforms
     /// are appended; after that, they are replaced.
-    pub(super) fn resample(&mut self, i: usize) {
-        let row = (i - self.first_time) * self.nj;
+    fn resample(&mut self, i: usize) {
+        let nj = self.nj;
+        let row = (i - self.first_time) * nj;
         if row == self.model.len() {
-            let filler = [Affine3A::IDENTITY].repeat(self.nj);
-            self.local_aff.extend_from_slice(&filler);
-            self.model.extend_from_slice(&filler);
+            self.local_aff.resize(row + nj, Affine3A::IDENTITY);
+            self.model.resize(row + nj, Affine3A::IDENTITY);
         }
+        let mut local = std::mem::take(&mut self.local_aff);
+        let mut model = std::mem::take(&mut self.model);
+        self.pose_into(i, &mut local[row..row + nj], &mut model[row..row + nj]);
+        self.local_aff = local;
+        self.model = model;
+    }
+
+    /// Every joint's local and model transform at source time `i` into `local` and `model` (one
+    /// per joint, parents first).
+    fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
         for d in 0..self.nj {
-            self.local_aff[row + d] = self.local_pose(d, i).to_affine();
-            let pm = self
-                .parent(d)
-                .map_or(Affine3A::IDENTITY, |p| self.model[row + p]);
-            self.model[row + d] = pm * self.local_aff[row + d];
+            local[d] = self.local_pose(d, i).to_affine();
+            let pm = self.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
+            model[d] = pm * local[d];
         }
+    }
+
+    /// The largest ratio of a joint's error to its limit at source time `i` with the model
+    /// transforms `model` (one per joint), or `None` when one exceeds its limit.
+    fn time_ratio(&self, i: usize, model: &[Affine3A]) -> Option<f32> {
+        let mut worst = 0.0f32;
+        for (j, m) in model.iter().enumerate() {
+            let (error, limit) = (self.error_at(i, j, m), self.ctx.limits[j]);
+            if exceeds(error, limit) {
+                return None;
+            }
+            worst = worst.max(error / limit);
+        }
+        Some(worst)
     }
 
     /// Whether some joint exceeds its limit at source time `i`, computed apart from the state
     /// (the probe of [`Eval::build`], before the times ahead of it are computed): the same
     /// transforms [`Eval::resample`] computes.
     fn probe_fails(&self, i: usize) -> bool {
-        let mut model: Vec<Affine3A> = Vec::with_capacity(self.nj);
-        for d in 0..self.nj {
-            let pm = self
-                .parent(d)
-                .and_then(|p| model.get(p).copied())
-                .unwrap_or(Affine3A::IDENTITY);
-            model.push(pm * self.local_pose(d, i).to_affine());
-        }
-        model
-            .iter()
-            .enumerate()
-            .any(|(j, m)| exceeds(self.error_at(i, j, m), self.ctx.limits[j]))
+        let mut local = vec![Affine3A::IDENTITY; self.nj];
+        let mut model = vec![Affine3A::IDENTITY; self.nj];
+        self.pose_into(i, &mut local, &mut model);
+        self.time_ratio(i, &model).is_none()
     }
 
     /// Joint `d`'s local pose at source time `i`: its track's, or its base pose without one.

@@ -77,7 +77,8 @@ pub(super) fn first_eval<'a>(
     // widths equal those of the state in hand passes, one whose widths failed before fails, and
     // only distinct widths are measured. The same verdicts, so the same result.
     let mut failed: Vec<Vec<u8>> = Vec::new();
-    // A failing check's time becomes the probe (the higher rung's when both of a pair fail).
+    // A failing check's time, or a passing one's time of largest error, becomes the first probe
+    // (the higher rung's when both of a pair are settled).
     let settle = |r: Measured<'a>, failed: &mut Vec<Vec<u8>>, probe: &mut Probes| match r {
         Ok((e, worst)) => {
             add_probe(probe, worst);

@@ -166,11 +166,23 @@ struct KeyRow {
 /// Joint-times from which [`Eval::build`] quantizes keys and computes times in chunks side by side
 /// (a long clip's passing check is a few milliseconds of work).
 const SIDE_BY_SIDE_BUILD: usize = 16 * 1024;
-/// Source times per block, keys and source times per chunk of a block, of [`Eval::build`]'s
-/// side-by-side passes.
+/// Source times of the first block of [`Eval::build`]'s side-by-side passes (each block after a
+/// passing one twice as long, at most `MAX_TIMES_PER_BLOCK`), and the fewest keys and source
+/// times per chunk of a block (a chunk much shorter costs more in waiting than it saves).
 const TIMES_PER_BLOCK: usize = 256;
-const KEYS_PER_CHUNK: usize = 64;
-const TIMES_PER_CHUNK: usize = 64;
+const MAX_TIMES_PER_BLOCK: usize = 4096;
+const MIN_KEYS_PER_CHUNK: usize = 16;
+const MIN_TIMES_PER_CHUNK: usize = 16;
+
+/// One chunk of [`Eval::quantize_keys_side_by_side`]: its first key and its range of every
+/// per-key buffer (per component, per rotation, and the model rotations).
+struct KeyChunk<'s> {
+    k0: usize,
+    qi: Vec<&'s mut [u32]>,
+    dec: Vec<&'s mut [f32]>,
+    raw: Vec<&'s mut [Quat]>,
+    rot: &'s mut [Quat],
+}
 
 /// Source times a first-width check measures first, most recent first: where the last checks
 /// failed, and where the last passing ones had their largest errors ([`add_probe`]).
@@ -345,56 +357,45 @@ impl<'a> Eval<'a> {
         (e, Ok(worst.1))
     }
 
-    /// The rest of [`Eval::build`] for a long clip, a block of source times at a time: the keys
-    /// the block reads that are not quantized yet, in chunks side by side, then the block's
-    /// transforms (and with `check`, its errors), in chunks side by side; a check stops after the
-    /// first block where a joint is over its limit. The state is the one the sequential build
+    /// The rest of [`Eval::build`] for a long clip, a block of source times at a time (each block
+    /// after a passing one twice as long, up to [`MAX_TIMES_PER_BLOCK`]): the keys the block reads
+    /// that are not quantized yet, in chunks side by side, each writing its own range of the
+    /// state, then the block's transforms (and with `check`, its errors), in chunks side by side;
+    /// a check stops after the first block where a joint is over its limit. The state is the one the sequential build
     /// gives, value for value, and so is the verdict (its failing time may be another failing
     /// one: it only serves as the next check's probe).
     fn build_side_by_side(&mut self, check: bool) -> Result<usize, usize> {
         let n = self.layout.keys;
         let nj = self.nj.max(1);
         let times = self.at.len();
+        // Chunks per block: a few per thread, so that a thread that finishes early takes another.
+        let chunks = 2 * rayon::current_num_threads().max(1);
         let mut next = 0;
         let mut worst = (0.0f32, 0usize);
-        for t0 in (0..times).step_by(TIMES_PER_BLOCK) {
-            let t1 = (t0 + TIMES_PER_BLOCK).min(times);
+        let mut t0 = 0;
+        let mut block = TIMES_PER_BLOCK;
+        while t0 < times {
+            let t1 = (t0 + block).min(times);
             let need = self.keys_read_before(t1 - 1);
-            let keys: Vec<usize> = (next..need).step_by(KEYS_PER_CHUNK).collect();
-            let rows: Vec<Vec<KeyRow>> = keys
-                .par_iter()
-                .map(|&k0| {
-                    (k0..(k0 + KEYS_PER_CHUNK).min(need))
-                        .map(|k| {
-                            let mut row = KeyRow::default();
-                            self.key_into(k, &mut row);
-                            row
-                        })
-                        .collect()
-                })
-                .collect();
-            for (&k0, chunk) in keys.iter().zip(&rows) {
-                for (k, row) in (k0..).zip(chunk) {
-                    self.store_key(k, row);
-                }
-            }
+            self.quantize_keys_side_by_side(next..need.max(next), chunks);
             next = next.max(need);
             let mut local = std::mem::take(&mut self.local_aff);
             let mut model = std::mem::take(&mut self.model);
             local.resize(t1 * nj, Affine3A::IDENTITY);
             model.resize(t1 * nj, Affine3A::IDENTITY);
+            let per = (t1 - t0).div_ceil(chunks).max(MIN_TIMES_PER_CHUNK);
             let state: &Eval = self;
             // Per chunk: its first failing time, or its first time of the largest ratio.
             let found: Vec<Result<(f32, usize), usize>> = local[t0 * nj..]
-                .par_chunks_mut(TIMES_PER_CHUNK * nj)
-                .zip(model[t0 * nj..].par_chunks_mut(TIMES_PER_CHUNK * nj))
+                .par_chunks_mut(per * nj)
+                .zip(model[t0 * nj..].par_chunks_mut(per * nj))
                 .enumerate()
                 .map(|(ci, (local, model))| {
                     let mut worst = (0.0f32, 0usize);
                     for (t, (local, model)) in
                         local.chunks_mut(nj).zip(model.chunks_mut(nj)).enumerate()
                     {
-                        let i = t0 + ci * TIMES_PER_CHUNK + t;
+                        let i = t0 + ci * per + t;
                         state.pose_into(i, local, model);
                         if check {
                             match state.time_ratio(i, model) {
@@ -416,9 +417,76 @@ impl<'a> Eval<'a> {
                     Ok(_) => {}
                 }
             }
+            t0 = t1;
+            // A check that passed this block likely passes: larger blocks, fewer waits.
+            block = (2 * block).min(MAX_TIMES_PER_BLOCK);
         }
-        self.requantize_keys(next..n, &mut KeyRow::default());
+        self.quantize_keys_side_by_side(next..n.max(next), chunks);
         Ok(worst.1)
+    }
+
+    /// Quantizes `keys` ([`Eval::key_into`]; the state holds every key, from key 0) in about
+    /// `chunks` runs side by side, each writing its own range of every per-key buffer.
+    fn quantize_keys_side_by_side(&mut self, keys: std::ops::Range<usize>, chunks: usize) {
+        let (len, nj) = (keys.len(), self.nj);
+        if len == 0 || nj == 0 {
+            self.requantize_keys(keys, &mut KeyRow::default());
+            return;
+        }
+        let per = len.div_ceil(chunks.max(1)).max(MIN_KEYS_PER_CHUNK);
+        let (mut qi, mut dec) = (std::mem::take(&mut self.qi), std::mem::take(&mut self.dec));
+        let (mut raw, mut rot) = (
+            std::mem::take(&mut self.raw),
+            std::mem::take(&mut self.key_rot),
+        );
+        let mut parts: Vec<KeyChunk> = keys
+            .clone()
+            .step_by(per)
+            .map(|k0| KeyChunk {
+                k0,
+                qi: Vec::with_capacity(qi.len()),
+                dec: Vec::with_capacity(dec.len()),
+                raw: Vec::with_capacity(raw.len()),
+                rot: &mut [],
+            })
+            .collect();
+        for v in &mut qi {
+            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
+                p.qi.push(s);
+            }
+        }
+        for v in &mut dec {
+            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
+                p.dec.push(s);
+            }
+        }
+        for v in &mut raw {
+            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
+                p.raw.push(s);
+            }
+        }
+        for (p, s) in parts
+            .iter_mut()
+            .zip(rot[keys.start * nj..keys.end * nj].chunks_mut(per * nj))
+        {
+            p.rot = s;
+        }
+        let state: &Eval = self;
+        parts.into_par_iter().for_each(|mut p| {
+            let mut row = KeyRow::default();
+            for (at, k) in (p.k0..).take(p.rot.len() / nj).enumerate() {
+                state.key_into(k, &mut row);
+                for (c, &(q, x)) in row.q.iter().enumerate() {
+                    p.qi[c][at] = q;
+                    p.dec[c][at] = x;
+                }
+                for (ri, &r) in row.raw.iter().enumerate() {
+                    p.raw[ri][at] = r;
+                }
+                p.rot[at * nj..(at + 1) * nj].copy_from_slice(&row.rot);
+            }
+        });
+        (self.qi, self.dec, self.raw, self.key_rot) = (qi, dec, raw, rot);
     }
 
     /// [`Eval::build`] without the check.

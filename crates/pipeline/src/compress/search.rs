@@ -442,20 +442,23 @@ pub(super) fn estimated_candidates<'a>(
     }
     sized.sort_by_key(|f| (f.0, f.1));
     sized.truncate(count);
-    // The chosen layouts' own first widths, measured from their work's budget.
+    // The chosen layouts' own first widths, measured from their work's budget, side by side
+    // when there are several, else with the rung above measured beside the start; the probes
+    // of the ladders so far first (a layout's hardest poses are usually another's).
+    let alone = par && count == 1;
     map_in_order(sized, par && count > 1, |(_, li, budget, measured)| {
         let (wi, layout, _) = &layouts[li];
         match measured {
             Some(e) => Some((li, e)),
             None => {
-                let mut probe = [None; PROBES];
+                let mut probe = probe;
                 first_eval(
                     ctx,
                     layout,
                     &works[*wi],
                     budget,
                     compensate,
-                    false,
+                    alone,
                     &mut probe,
                 )
                 .map(|(_, e)| (li, e))

@@ -3,7 +3,7 @@
 use super::metric::{fk, point_error, Rig};
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
-use sinew_core::{Channel, Clip, ClipBinding, Sampler, Track, Transform};
+use sinew_core::{Channel, Clip, Track, Transform};
 
 /// A clip's channel values per key, ready to rebuild clips from.
 #[derive(Clone)]
@@ -297,7 +297,10 @@ pub(super) fn simplify_channels(
                 continue;
             }
             for t in candidates {
-                if state.try_track(rig, like, src, src_times, joint, &work.times, &t, budget) {
+                let Some(value) = Replacement::of(ch, &t, state.defaults[joint]) else {
+                    continue;
+                };
+                if state.try_channel(rig, src, joint, value, budget) {
                     work.tracks[i] = t;
                     break;
                 }
@@ -342,70 +345,112 @@ impl<'a> SubtreeState<'a> {
         }
     }
 
-    /// Whether `track` (for `joint`) in place of the work's keeps every error of the joint's
-    /// subtree within `budget`; if so the state takes it.
-    #[allow(clippy::too_many_arguments)]
-    fn try_track(
+    /// Whether the work's track for `joint` with one channel replaced by a value held at every time
+    /// (`value`: a constant, or the bind value) keeps every error of the joint's subtree within
+    /// `budget`; if so the state takes it. The joint's local pose at each time is the state's with
+    /// that channel replaced: what the runtime sampler gives for the track so changed, bit for bit
+    /// (it copies a channel that is not animated, and computes each channel on its own).
+    fn try_channel(
         &mut self,
         rig: &Rig,
-        like: &Clip,
         src: &[Vec<[Vec3; 3]>],
-        times: &[f32],
         joint: usize,
-        key_times: &[f32],
-        track: &WTrack,
+        value: Replacement,
         budget: f32,
     ) -> bool {
-        let one = Work {
-            times: key_times.to_vec(),
-            tracks: vec![track.clone()],
-        };
-        let Some(clip) = one.plain(like) else {
+        if !value.is_finite() {
             return false;
-        };
-        let binding = ClipBinding::new(&clip, &rig.skeleton);
-        let mut sampler = Sampler::new();
+        }
         let parents = rig.skeleton.parents();
         let sub = &self.subtree[joint];
-        let mut pose: Vec<Transform> = Vec::new();
-        let mut new_local = Vec::with_capacity(times.len());
         // Per time, the subtree's new model transforms (in `sub` order).
-        let mut new_model: Vec<Affine3A> = Vec::with_capacity(times.len() * sub.len());
+        let mut new_model: Vec<Affine3A> = Vec::with_capacity(self.local.len() * sub.len());
         let mut at = vec![0usize; rig.skeleton.len()];
         for (n, &d) in sub.iter().enumerate() {
             at[d] = n;
         }
-        for (k, &t) in times.iter().enumerate() {
-            pose.clear();
-            pose.extend_from_slice(&self.local[k]);
-            pose[joint] = self.defaults[joint];
-            // The output matches the skeleton and the binding was made for it.
-            let _ = sampler.sample(&clip, &binding, &rig.skeleton, t, &mut pose);
+        for ((local, model), src_k) in self.local.iter().zip(&self.model).zip(src) {
             let base = new_model.len();
             for (n, &d) in sub.iter().enumerate() {
-                let a = pose[d].to_affine();
+                let a = if n == 0 {
+                    value.applied(local[d]).to_affine()
+                } else {
+                    local[d].to_affine()
+                };
                 let m = match parents.get(d).copied().flatten().map(usize::from) {
                     Some(p) if n > 0 => new_model[base + at[p]] * a,
-                    Some(p) => self.model[k][p] * a,
+                    Some(p) => model[p] * a,
                     None => a,
                 };
                 new_model.push(m);
                 let pts = rig.points[d].map(|x| m.transform_point3(x));
                 let e =
-                    point_error(&src[k][d..=d], std::slice::from_ref(&pts)).fold(0.0f32, f32::max);
+                    point_error(&src_k[d..=d], std::slice::from_ref(&pts)).fold(0.0f32, f32::max);
                 if e > budget {
                     return false;
                 }
             }
-            new_local.push(pose[joint]);
         }
-        for (k, l) in new_local.into_iter().enumerate() {
-            self.local[k][joint] = l;
-            for (n, &d) in sub.iter().enumerate() {
-                self.model[k][d] = new_model[k * sub.len() + n];
+        for ((local, model), new) in self
+            .local
+            .iter_mut()
+            .zip(&mut self.model)
+            .zip(new_model.chunks_exact(sub.len()))
+        {
+            local[joint] = value.applied(local[joint]);
+            for (&d, &m) in sub.iter().zip(new) {
+                model[d] = m;
             }
         }
         true
+    }
+}
+
+/// One channel's value at every time, for [`SubtreeState::try_channel`].
+#[derive(Clone, Copy)]
+pub(super) enum Replacement {
+    T(Vec3),
+    R(Quat),
+    S(Vec3),
+}
+
+impl Replacement {
+    /// Channel `ch` (0 translation, 1 rotation, 2 scale) of `track`, replaced by a constant or
+    /// the bind value (`bind`: the joint's bind pose, as the runtime sampler has it); `None` for
+    /// keys.
+    pub(super) fn of(ch: usize, track: &WTrack, bind: Transform) -> Option<Replacement> {
+        let v3 = |c: &WChan<Vec3>, b: Vec3| match c {
+            WChan::Bind => Some(b),
+            WChan::Constant(v) => Some(*v),
+            WChan::Keys(_) => None,
+        };
+        match ch {
+            0 => v3(&track.t, bind.translation).map(Replacement::T),
+            1 => match &track.r {
+                WChan::Bind => Some(Replacement::R(bind.rotation)),
+                WChan::Constant(q) => Some(Replacement::R(*q)),
+                WChan::Keys(_) => None,
+            },
+            _ => v3(&track.s, bind.scale).map(Replacement::S),
+        }
+    }
+
+    /// Whether the value is finite (a clip holds only finite constants).
+    fn is_finite(self) -> bool {
+        match self {
+            Replacement::T(v) | Replacement::S(v) => v.is_finite(),
+            Replacement::R(q) => q.is_finite(),
+        }
+    }
+
+    /// `local` with this channel replaced.
+    pub(super) fn applied(self, mut local: Transform) -> Transform {
+        match self {
+            Replacement::T(v) => local.translation = v,
+            Replacement::R(q) => local.rotation = q,
+            Replacement::S(v) => local.scale = v,
+        }
+        local
     }
 }
 

@@ -181,12 +181,18 @@ pub(super) fn mean_quat(v: &[Quat]) -> Quat {
 /// kept up to date instead of re-sampling whole clips. The tried joint's local pose is the one the
 /// runtime sampler gives for its track alone (lanes are independent), so the decisions are those of
 /// measuring whole clips.
+///
+/// `poses`: the work's poses at `src_times` when they are known already (the work as
+/// [`Work::from_plain`] gives it for the clip they were sampled from: the same values at the same
+/// times, so the same poses); else they are sampled here.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn simplify_channels(
     work: &mut Work,
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
     src_times: &[f32],
+    poses: Option<&[Vec<Transform>]>,
     budget: f32,
     bind_allowed: bool,
 ) {
@@ -205,10 +211,14 @@ pub(super) fn simplify_channels(
             }
         })
         .collect();
-    let Some(plain) = work.plain(like) else {
-        return;
+    let local = match poses {
+        Some(poses) => poses.to_vec(),
+        None => match work.plain(like) {
+            Some(plain) => rig.poses(&plain, src_times),
+            None => return,
+        },
     };
-    let mut state = SubtreeState::new(rig, &plain, src_times);
+    let mut state = SubtreeState::new(rig, local, like.additive());
     #[allow(clippy::needless_range_loop)] // `work` is replaced inside the loop
     for i in 0..work.tracks.len() {
         let Some(joint) = rig.skeleton.find(&work.tracks[i].joint).map(usize::from) else {
@@ -321,8 +331,9 @@ struct SubtreeState<'a> {
 }
 
 impl<'a> SubtreeState<'a> {
-    fn new(rig: &'a Rig, plain: &Clip, times: &[f32]) -> SubtreeState<'a> {
-        let local = rig.poses(plain, times);
+    /// The state of the work whose poses at the source times are `local` (`additive`: the
+    /// clip's kind).
+    fn new(rig: &'a Rig, local: Vec<Vec<Transform>>, additive: bool) -> SubtreeState<'a> {
         let mut m = Vec::new();
         let model = local
             .iter()
@@ -332,7 +343,7 @@ impl<'a> SubtreeState<'a> {
             })
             .collect();
         let nj = rig.skeleton.len();
-        let defaults = if plain.additive() {
+        let defaults = if additive {
             vec![Transform::IDENTITY; nj]
         } else {
             rig.skeleton.bind_local().to_vec()

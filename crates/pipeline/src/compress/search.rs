@@ -246,7 +246,9 @@ pub(super) fn segment_candidates(n: usize) -> Vec<usize> {
 /// one layout per work and estimates the others; the [`DESCENDED`] smallest are refined by
 /// [`descend`], and the smallest result is kept (the first of equals). `Max` adds
 /// [`exhaustive_candidates`]. `compensate`: quantize rotations with chain
-/// compensation (only when every scale of the source poses is positive and uniform).
+/// compensation (only when every scale of the source poses is positive and uniform). `work`: the
+/// source's, as [`Work::from_plain`] gives it; `sampled`: the source sampled at its times, when
+/// known.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn compress_work(
     work: &mut Work,
@@ -274,6 +276,7 @@ pub(super) fn compress_work(
         rig,
         src,
         times,
+        sampled.map(|s| s.poses.as_slice()),
         tolerance * 0.25,
         bind_allowed,
     );
@@ -371,7 +374,9 @@ pub(super) fn compress_work(
             Start::State(e) => *e,
             Start::Bits(bits) => Eval::new(&ctx, layout, w, bits, compensate),
         };
-        let before = e.encode(w);
+        // The starting widths and stored integers: encoded only if the refined state does not
+        // hold at every source time (it always has on the corpus).
+        let start = (e.bits.clone(), e.qi.clone());
         // Fast: every round at threshold 1 (no graded first rounds): 15-25% less work for
         // 0.3-2.2% more bytes on the corpus's clips (docs/performance.md, session 10).
         let thresholds: &[f32] = if effort == Effort::Fast {
@@ -380,9 +385,14 @@ pub(super) fn compress_work(
             &THRESHOLDS
         };
         descend(&mut e, alone, thresholds);
-        [e.encode(w), before].into_iter().flatten().find_map(|c| {
+        let holds = |c: Clip| {
             let errors = errors_against(rig, src, &c, times);
             within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
+        };
+        e.encode(w).and_then(holds).or_else(|| {
+            layout
+                .encode(&start.0, &start.1, w, ctx.like)
+                .and_then(holds)
         })
     });
     let mut best: Option<Found> = None;

@@ -3,8 +3,8 @@
 
 use super::eval::{Eval, SegmentState};
 use super::trial::{Trial, MAX_PROBES};
-use rayon::prelude::*;
-use std::sync::{Mutex, PoisonError};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError, RwLock};
 
 /// What refining one segment on a copy of the state gives back: the segment, what it wrote
 /// (`None` when nothing was kept), its components' `blocked` and `probes` entries, and its joints'
@@ -40,24 +40,25 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
     }
     // Per segment, per component: failed at threshold 1 (not tried again), and where its last
     // failed try stopped (a time to measure first).
-    let mut blocked = vec![false; nc * segs];
-    let mut probes = vec![usize::MAX; nc * segs];
+    let blocked = vec![false; nc * segs];
+    let probes = vec![usize::MAX; nc * segs];
     // Per segment, per joint: the largest ratio of error to limit at the segment's source times,
     // and where (the first time tried of a component whose subtree has it). Kept up to date by
     // the kept tries on the segment; a kept try on a neighbouring segment can change a shared
     // time's error without updating it here, which only makes the guess worse.
-    let nj = eval.nj;
-    let mut worst = segment_worst(eval);
-    let threads = rayon::current_num_threads();
-    let side_by_side = par && threads > 1 && segs > 2;
-    // Per thread of the pool: a copy of the state and a trial to refine segments in.
-    let slots: Vec<Mutex<(Eval, Trial)>> = if side_by_side {
-        (0..threads)
-            .map(|_| Mutex::new((eval.empty_copy(), Trial::default())))
-            .collect()
-    } else {
-        Vec::new()
+    let worst = segment_worst(eval);
+    // Threads that can take a segment of a parity (at most half the segments each).
+    let threads = rayon::current_num_threads().min(segs.div_ceil(2));
+    let mut state = State {
+        eval,
+        blocked,
+        probes,
+        worst,
     };
+    if par && threads > 1 && segs > 2 {
+        side_by_side(state, threads, thresholds);
+        return;
+    }
     let mut trial = Trial::default();
     let mut round = 0;
     loop {
@@ -65,62 +66,274 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
         round += 1;
         let mut changed = false;
         for parity in 0..2 {
-            let segments: Vec<usize> = (parity..segs).step_by(2).collect();
-            if side_by_side && segments.len() > 1 {
-                let state: &Eval = eval;
-                let (blocked_now, probes_now, worst_now) = (&blocked[..], &probes[..], &worst[..]);
-                let done: Vec<Refined> = segments
-                    .par_iter()
-                    .map(|&s| {
-                        let at = rayon::current_thread_index().unwrap_or(0) % slots.len();
-                        let mut slot = slots[at].lock().unwrap_or_else(PoisonError::into_inner);
-                        let (copy, trial) = &mut *slot;
-                        let own = s * nc..(s + 1) * nc;
-                        let mut b = blocked_now[own.clone()].to_vec();
-                        let mut p = probes_now[own].to_vec();
-                        let mut w = worst_now[s * nj..(s + 1) * nj].to_vec();
-                        let kept = refine_segment(
-                            copy,
-                            Some(state),
-                            trial,
-                            s,
-                            limit,
-                            (&mut b, &mut p, &mut w),
-                        );
-                        (s, kept.then(|| copy.segment_state(s)), b, p, w)
-                    })
-                    .collect();
-                for (s, written, b, p, w) in done {
-                    let own = s * nc..(s + 1) * nc;
-                    blocked[own.clone()].copy_from_slice(&b);
-                    probes[own].copy_from_slice(&p);
-                    worst[s * nj..(s + 1) * nj].copy_from_slice(&w);
-                    if let Some(written) = written {
-                        eval.store_segment(&written);
-                        changed = true;
-                    }
-                }
-            } else {
-                for s in segments {
-                    let own = s * nc..(s + 1) * nc;
-                    changed |= refine_segment(
-                        eval,
-                        None,
-                        &mut trial,
-                        s,
-                        limit,
-                        (
-                            &mut blocked[own.clone()],
-                            &mut probes[own],
-                            &mut worst[s * nj..(s + 1) * nj],
-                        ),
-                    );
-                }
+            for s in (parity..segs).step_by(2) {
+                changed |= state.refine_in_place(&mut trial, s, limit);
             }
         }
         if !changed && round >= thresholds.len() {
             break;
         }
+    }
+}
+
+/// The state a refinement works on, and its bookkeeping per segment ([`descend`]).
+struct State<'e, 'a> {
+    eval: &'e mut Eval<'a>,
+    blocked: Vec<bool>,
+    probes: Vec<usize>,
+    worst: Vec<(f32, usize)>,
+}
+
+impl State<'_, '_> {
+    /// One round's tries on segment `s` of the state itself ([`refine_segment`]).
+    fn refine_in_place(&mut self, trial: &mut Trial, s: usize, limit: f32) -> bool {
+        let (nc, nj) = (self.eval.layout.comps.len(), self.eval.nj);
+        let own = s * nc..(s + 1) * nc;
+        refine_segment(
+            self.eval,
+            None,
+            trial,
+            s,
+            limit,
+            (
+                &mut self.blocked[own.clone()],
+                &mut self.probes[own],
+                &mut self.worst[s * nj..(s + 1) * nj],
+            ),
+        )
+    }
+
+    /// One round's tries on segment `s` on `copy` (a copy of the state: [`Eval::empty_copy`]),
+    /// reading the state: what they wrote and the segment's bookkeeping.
+    fn refine_on_copy(&self, copy: &mut Eval, trial: &mut Trial, s: usize, limit: f32) -> Refined {
+        let (nc, nj) = (self.eval.layout.comps.len(), self.eval.nj);
+        let own = s * nc..(s + 1) * nc;
+        let mut b = self.blocked[own.clone()].to_vec();
+        let mut p = self.probes[own].to_vec();
+        let mut w = self.worst[s * nj..(s + 1) * nj].to_vec();
+        let kept = refine_segment(
+            copy,
+            Some(self.eval),
+            trial,
+            s,
+            limit,
+            (&mut b, &mut p, &mut w),
+        );
+        (s, kept.then(|| copy.segment_state(s)), b, p, w)
+    }
+
+    /// Writes what refining a segment on a copy gave back; true when it kept a try.
+    fn store(&mut self, (s, written, b, p, w): Refined) -> bool {
+        let (nc, nj) = (self.eval.layout.comps.len(), self.eval.nj);
+        let own = s * nc..(s + 1) * nc;
+        self.blocked[own.clone()].copy_from_slice(&b);
+        self.probes[own].copy_from_slice(&p);
+        self.worst[s * nj..(s + 1) * nj].copy_from_slice(&w);
+        match written {
+            Some(written) => {
+                self.eval.store_segment(&written);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// Spins of a waiting thread before it starts yielding its core.
+const SPINS: u32 = 1 << 12;
+
+/// Waits until `ready`: spinning first (a phase of the refinement is tens to hundreds of
+/// microseconds, and a thread put to sleep takes about as long to wake), then yielding.
+fn wait_until(ready: impl Fn() -> bool) {
+    let mut spins = 0u32;
+    while !ready() {
+        if spins < SPINS {
+            spins += 1;
+            std::hint::spin_loop();
+        } else {
+            std::thread::yield_now();
+        }
+    }
+}
+
+/// The phases of a side-by-side refinement: each phase is the segments of one parity at one
+/// round's threshold; any thread claims the next segment until none is left.
+struct Phases {
+    /// The phase's number (high 32 bits) and the next segment to claim (low 32 bits).
+    cursor: AtomicU64,
+    /// The current phase: its number, segments and threshold.
+    plan: RwLock<(u64, Vec<usize>, f32)>,
+    /// Per segment of the current phase: what refining it gave, and how many are done.
+    results: Mutex<Vec<Option<Refined>>>,
+    done: AtomicUsize,
+    /// The refinement is over (the helpers return), or a helper panicked.
+    over: AtomicBool,
+    failed: AtomicBool,
+    /// Per segment: how long its last refinement took (nanoseconds): the next phase hands out
+    /// the longest first, so that one long segment does not start last. (The order changes no
+    /// result: each segment reads only the state, and what they wrote is stored in segment
+    /// order.)
+    cost: Vec<AtomicU64>,
+}
+
+impl Phases {
+    /// Claims the next segment of phase `number` (`count` segments), if any is left.
+    fn claim(&self, number: u64, count: usize) -> Option<usize> {
+        let mut v = self.cursor.load(Ordering::Acquire);
+        loop {
+            let at = (v & u64::from(u32::MAX)) as usize;
+            if v >> 32 != number || at >= count {
+                return None;
+            }
+            match self
+                .cursor
+                .compare_exchange_weak(v, v + 1, Ordering::AcqRel, Ordering::Acquire)
+            {
+                Ok(_) => return Some(at),
+                Err(now) => v = now,
+            }
+        }
+    }
+
+    /// Refines the segments of phase `number` this thread claims, on its slot.
+    fn work(
+        &self,
+        number: u64,
+        segments: &[usize],
+        limit: f32,
+        state: &RwLock<State>,
+        slot: &Mutex<(Eval, Trial)>,
+    ) {
+        while let Some(i) = self.claim(number, segments.len()) {
+            let started = std::time::Instant::now();
+            let refined = {
+                let state = state.read().unwrap_or_else(PoisonError::into_inner);
+                let mut slot = slot.lock().unwrap_or_else(PoisonError::into_inner);
+                let (copy, trial) = &mut *slot;
+                state.refine_on_copy(copy, trial, segments[i], limit)
+            };
+            let took = u64::try_from(started.elapsed().as_nanos()).unwrap_or(u64::MAX);
+            self.cost[segments[i]].store(took, Ordering::Relaxed);
+            self.results.lock().unwrap_or_else(PoisonError::into_inner)[i] = Some(refined);
+            self.done.fetch_add(1, Ordering::Release);
+        }
+    }
+}
+
+/// Marks the refinement failed if the thread holding it unwinds (the others stop waiting).
+struct FailOnUnwind<'p>(&'p AtomicBool);
+
+impl Drop for FailOnUnwind<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Ordering::Release);
+        }
+    }
+}
+
+/// [`descend`] with each parity's segments refined on copies of the state by `threads` threads
+/// at once (the calling thread and helpers that stay with the refinement to its end, so that no
+/// phase waits for a thread to be woken), what they wrote copied back in segment order. The
+/// calling thread never waits for a helper to start: it claims segments too, and does them all
+/// if no helper comes, so a pool busy elsewhere only makes it slower.
+fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
+    let segs = state.eval.layout.seg_count;
+    let slots: Vec<Mutex<(Eval, Trial)>> = (0..threads)
+        .map(|_| Mutex::new((state.eval.empty_copy(), Trial::default())))
+        .collect();
+    let state = RwLock::new(state);
+    let phases = Phases {
+        cursor: AtomicU64::new(0),
+        plan: RwLock::new((0, Vec::new(), 1.0)),
+        results: Mutex::new(Vec::new()),
+        done: AtomicUsize::new(0),
+        over: AtomicBool::new(false),
+        failed: AtomicBool::new(false),
+        cost: (0..segs).map(|_| AtomicU64::new(0)).collect(),
+    };
+    let helper = |slot: &Mutex<(Eval, Trial)>| {
+        let _fail = FailOnUnwind(&phases.failed);
+        let mut seen = 0u64;
+        loop {
+            wait_until(|| {
+                phases.over.load(Ordering::Acquire)
+                    || phases.cursor.load(Ordering::Acquire) >> 32 != seen
+            });
+            if phases.over.load(Ordering::Acquire) {
+                return;
+            }
+            let (number, segments, limit) = phases
+                .plan
+                .read()
+                .unwrap_or_else(PoisonError::into_inner)
+                .clone();
+            seen = number;
+            phases.work(number, &segments, limit, &state, slot);
+        }
+    };
+    rayon::scope(|scope| {
+        for slot in &slots[1..] {
+            let helper = &helper;
+            scope.spawn(move |_| helper(slot));
+        }
+        let _over = OverOnDrop(&phases.over);
+        let mut number = 0u64;
+        let mut round = 0;
+        loop {
+            let limit = thresholds.get(round).copied().unwrap_or(1.0);
+            round += 1;
+            let mut changed = false;
+            for parity in 0..2 {
+                let mut segments: Vec<usize> = (parity..segs).step_by(2).collect();
+                segments
+                    .sort_by_key(|&s| std::cmp::Reverse(phases.cost[s].load(Ordering::Relaxed)));
+                let count = segments.len();
+                number += 1;
+                *phases
+                    .results
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner) = (0..count).map(|_| None).collect();
+                phases.done.store(0, Ordering::Release);
+                *phases.plan.write().unwrap_or_else(PoisonError::into_inner) =
+                    (number, segments.clone(), limit);
+                phases.cursor.store(number << 32, Ordering::Release);
+                phases.work(number, &segments, limit, &state, &slots[0]);
+                wait_until(|| {
+                    phases.done.load(Ordering::Acquire) == count
+                        || phases.failed.load(Ordering::Acquire)
+                });
+                assert!(
+                    !phases.failed.load(Ordering::Acquire),
+                    "a refinement helper panicked"
+                );
+                let mut results: Vec<Refined> = std::mem::take(
+                    &mut *phases
+                        .results
+                        .lock()
+                        .unwrap_or_else(PoisonError::into_inner),
+                )
+                .into_iter()
+                .flatten()
+                .collect();
+                results.sort_by_key(|r| r.0);
+                let mut state = state.write().unwrap_or_else(PoisonError::into_inner);
+                for refined in results {
+                    changed |= state.store(refined);
+                }
+            }
+            if !changed && round >= thresholds.len() {
+                break;
+            }
+        }
+    });
+}
+
+/// Tells the helpers the refinement is over when the calling thread leaves it (normally or not).
+struct OverOnDrop<'p>(&'p AtomicBool);
+
+impl Drop for OverOnDrop<'_> {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Release);
     }
 }
 

@@ -184,7 +184,8 @@ pub(super) fn mean_quat(v: &[Quat]) -> Quat {
 ///
 /// `poses`: the work's poses at `src_times` when they are known already (the work as
 /// [`Work::from_plain`] gives it for the clip they were sampled from: the same values at the same
-/// times, so the same poses); else they are sampled here.
+/// times, so the same poses); else they are sampled here. Returns the simplified work's poses at
+/// `src_times` (`None` when the work makes no clip).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn simplify_channels(
     work: &mut Work,
@@ -195,7 +196,7 @@ pub(super) fn simplify_channels(
     poses: Option<&[Vec<Transform>]>,
     budget: f32,
     bind_allowed: bool,
-) {
+) -> Option<Vec<Vec<Transform>>> {
     let defaults: Vec<Option<Transform>> = work
         .tracks
         .iter()
@@ -215,7 +216,7 @@ pub(super) fn simplify_channels(
         Some(poses) => poses.to_vec(),
         None => match work.plain(like) {
             Some(plain) => rig.poses(&plain, src_times),
-            None => return,
+            None => return None,
         },
     };
     let mut state = SubtreeState::new(rig, local, like.additive());
@@ -317,6 +318,7 @@ pub(super) fn simplify_channels(
             }
         }
     }
+    Some(state.local)
 }
 
 /// The work's local poses and model transforms at every source time (time-major, one per rig
@@ -480,16 +482,37 @@ pub(super) fn reduce_keys(
     let Some(plain) = work.plain(like) else {
         return (0..n).collect();
     };
-    let poses = rig.poses(&plain, &work.times);
+    reduce_posed(
+        &work.times,
+        &rig.poses(&plain, &work.times),
+        rig,
+        src,
+        budget,
+    )
+}
+
+/// [`reduce_keys`] of a work whose poses at its key times (`times`) are `poses` (computed once
+/// for the several budgets of one work).
+pub(super) fn reduce_posed(
+    times: &[f32],
+    poses: &[Vec<Transform>],
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    budget: f32,
+) -> Vec<usize> {
+    let n = times.len();
+    if n <= 2 || poses.len() != n {
+        return (0..n).collect();
+    }
     let parents = rig.skeleton.parents();
     let mut m: Vec<Affine3A> = Vec::new();
     // Whether interpolating between keys `a` and `b` keeps every time between them within the
     // budget. Joint by joint, parents first (the forward kinematics and points of
     // [`Rig::points_of`], the errors of [`point_error`]), stopping at the first joint over it.
     let ok = |a: usize, b: usize| -> bool {
-        let (ta, tb) = (work.times[a], work.times[b]);
+        let (ta, tb) = (times[a], times[b]);
         for (k, src_k) in src.iter().enumerate().take(b).skip(a + 1) {
-            let x = (work.times[k] - ta) / (tb - ta);
+            let x = (times[k] - ta) / (tb - ta);
             m.clear();
             for (j, ((p, q), (src_j, at))) in poses[a]
                 .iter()

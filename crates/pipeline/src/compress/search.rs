@@ -10,12 +10,12 @@ use super::options::{
     MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
-use super::reduce::{reduce_keys, simplify_channels, Work};
+use super::reduce::{reduce_keys, reduce_posed, simplify_channels, Work};
 use super::refine::descend;
 use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::glam::Vec3;
-use sinew_core::{Channel, Clip, Skeleton};
+use sinew_core::{Channel, Clip, Skeleton, Transform};
 
 /// `f` over `items`, in order; in parallel (rayon) when `par`. The same results either way.
 fn map_in_order<T: Send, R: Send>(
@@ -270,7 +270,7 @@ pub(super) fn compress_work(
     };
     let compensate = compensate && ctx.uniform;
     let src = &ctx.src;
-    simplify_channels(
+    let poses = simplify_channels(
         work,
         source,
         rig,
@@ -297,9 +297,13 @@ pub(super) fn compress_work(
     let mut works: Vec<Work> = Vec::new();
     let mut default_works = 0;
     if options.key_reduction {
-        // Each budget's reduction is independent of the others: computed in parallel, used in order.
-        let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| {
-            reduce_keys(&base, source, rig, src, tolerance * frac)
+        // Each budget's reduction is independent of the others: computed in parallel, used in
+        // order, on the poses the channel simplification leaves (the same work's, computed once).
+        let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| match &poses {
+            Some(poses) if base.times.as_slice() == times => {
+                reduce_posed(&base.times, poses, rig, src, tolerance * frac)
+            }
+            _ => reduce_keys(&base, source, rig, src, tolerance * frac),
         });
         for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
@@ -556,7 +560,7 @@ fn search(
     let mut found: Vec<Found> = Vec::new();
     let times = source.times();
     let src = &*whole.points;
-    if let Some(thin) = thinned(source, rig, src, tolerance) {
+    if let Some(thin) = thinned(source, rig, src, Some(&whole.poses), tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // Its errors at every source time (those at the thinned times are the search's), kept
         // with the clip when each is within its joint's limit: they are the report's.
@@ -602,16 +606,20 @@ pub(super) const THINNING: f32 = 0.01;
 /// within 2e-6 rad: Fox's Walk has 157 key times for 18 glTF keys), and the search's cost grows with
 /// the times it measures. A result of the search on the thinned source is kept only if it holds at
 /// every time of the whole source.
-/// `src`: the source's error points at its times.
+/// `src`: the source's error points at its times; `poses`: its poses at its times, when known.
 pub(super) fn thinned(
     source: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    poses: Option<&[Vec<Transform>]>,
     tolerance: f32,
 ) -> Option<Clip> {
     let times = source.times();
     let work = Work::from_plain(source);
-    let kept = reduce_keys(&work, source, rig, src, tolerance * THINNING);
+    let kept = match poses {
+        Some(poses) => reduce_posed(times, poses, rig, src, tolerance * THINNING),
+        None => reduce_keys(&work, source, rig, src, tolerance * THINNING),
+    };
     if kept.len() * 5 > times.len() * 4 {
         return None;
     }

@@ -896,7 +896,7 @@ fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() 
     let src = rig.all_points(&rig.poses(&clip, clip.times()));
     // At 0.01 the slerped keys are within 1% of the tolerance of their neighbours' interpolation:
     // the thinned source keeps far fewer than four fifths of the times, all of them source times.
-    let thin = thinned(&clip, &rig, &src, 0.01).expect("thinned");
+    let thin = thinned(&clip, &rig, &src, None, 0.01).expect("thinned");
     assert!(
         thin.times().len() * 5 < clip.times().len() * 4,
         "{}",
@@ -919,5 +919,5 @@ fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() 
     assert!(c.times().iter().all(|t| clip.times().contains(t)));
     // At a tolerance where slerp and nlerp differ by more than 1% of it, nothing is left out.
     let src = rig.all_points(&rig.poses(&clip, clip.times()));
-    assert!(thinned(&clip, &rig, &src, 1e-7).is_none());
+    assert!(thinned(&clip, &rig, &src, None, 1e-7).is_none());
 }

@@ -67,13 +67,22 @@
 //!   their largest error (in this ladder or the previous layouts').
 //! - Independent work runs on rayon: the clips of a scene, the key reductions of a clip, its
 //!   layouts, the next two rungs of a first-width ladder, and `Max`'s refinements of several
-//!   candidates; a long clip's state (from 16,384 joint-times) is built a block of 256 source times
-//!   at a time, the block's keys and then its times in chunks side by side. The default's single refinement spreads its own work: tries on segments two or
-//!   more apart read and write disjoint keys and times, so each round refines the even segments
-//!   side by side, each on a copy of the state that holds what it reads, then the odd ones, and
-//!   copies back what each wrote. Every result is collected in a fixed order and the choices are
-//!   the sequential ones, so the output does not depend on the thread count (tests compare 1, 2
-//!   and 3 threads, and the side-by-side schedule against one try at a time).
+//!   candidates; a long clip's state (from 16,384 joint-times) is built a block of source times at
+//!   a time (256, doubling after each passing block), the block's keys and then its times in
+//!   chunks side by side, each chunk of keys writing its own range of the state. The default's
+//!   single refinement spreads its own work: tries on segments two or more apart read and write
+//!   disjoint keys and times, so each round refines the even segments side by side, each on a
+//!   copy of the state that holds what it reads, then the odd ones, and copies back what each
+//!   wrote, in segment order. The calling thread and helpers that stay for the whole refinement
+//!   claim the segments of each phase, longest first by their last refinement's time (a pool
+//!   thread woken per phase could take milliseconds to start). Every result is collected in a
+//!   fixed order and the choices are the sequential ones, so the output does not depend on the
+//!   thread count (tests compare 1, 2 and 3 threads, and the side-by-side schedule against one try
+//!   at a time).
+//! - What one step computes is not computed again by the next: the channel simplification tries a
+//!   constant by replacing that channel in the poses it holds (the runtime sampler's, bit for bit)
+//!   and starts from the source's poses the search sampled; the key reductions of every budget
+//!   start from the poses it leaves.
 //!
 //! The limits are per joint: the tolerance less a margin for f32 noise (a few ulps of the joint's
 //! model-space coordinates), so that an independent measurement against the source data also stays

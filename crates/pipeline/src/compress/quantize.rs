@@ -1,7 +1,8 @@
 //! Quantisation: per-component ranges, segments, bit widths and the smallest-three rotation split.
 
 use super::metric::Rig;
-use super::reduce::{WChan, Work};
+use super::reduce::{WChan, WTrack, Work};
+use rayon::prelude::*;
 use sinew_core::compressed::{
     compact_range_units, compact_rotation_range, dequant_params, pack, shared_indices,
     smallest_three, three_without, QuantizedParts, SegmentComponent, MAX_BITS,
@@ -161,6 +162,13 @@ pub(super) fn sub_range(range: [f32; 2], keys: &[f32]) -> SegmentComponent {
     e
 }
 
+/// One key of a split rotation track ([`split_rotations`]): the dropped component's index and the
+/// three stored components.
+type SplitKey = (u8, [f32; 3]);
+
+/// Joint-keys from which [`Components::new`] splits the rotation tracks side by side.
+const SPLIT_SIDE_BY_SIDE: usize = 16 * 1024;
+
 impl Components {
     pub(super) fn new(work: &Work, rig: &Rig, compensate: bool) -> Components {
         let n = work.times.len();
@@ -174,6 +182,17 @@ impl Components {
             }
         }
         let levers = rig.levers(&compensating);
+        // Each rotation track's split (most of the work here), one track per job on a long clip.
+        let split_of = |t: &WTrack| match &t.r {
+            WChan::Keys(v) => Some(split_rotations(v)),
+            _ => None,
+        };
+        let mut splits: Vec<Option<Vec<SplitKey>>> = if n * work.tracks.len() >= SPLIT_SIDE_BY_SIDE
+        {
+            work.tracks.par_iter().map(split_of).collect()
+        } else {
+            work.tracks.iter().map(split_of).collect()
+        };
         for (track, t) in work.tracks.iter().enumerate() {
             let j = rig.skeleton.find(&t.joint).map_or(0, usize::from);
             let reach = rig.reach.get(j).copied().unwrap_or(1.0);
@@ -199,8 +218,7 @@ impl Components {
                     push(v.iter().map(|x| x[i]).collect(), ps * 1.8, Kind::T, i, 0);
                 }
             }
-            if let WChan::Keys(v) = &t.r {
-                let split = split_rotations(v);
+            if let Some(split) = splits[track].take() {
                 index.push(split.iter().map(|s| s.0).collect());
                 let rot = index.len() - 1;
                 for i in 0..3 {

@@ -570,6 +570,38 @@ fn a_refinement_spread_over_the_threads_compresses_to_the_same_bytes_at_any_thre
 }
 
 #[test]
+fn a_refinement_side_by_side_finishes_alone_when_the_other_threads_are_busy() {
+    // The calling thread never waits for a helper of the refinement to start: with the pool's
+    // other thread held by a job that waits for the compression to end (as another clip's or
+    // mesh's work can hold it), the clip compresses on the calling thread alone, to the same
+    // bytes as on one thread.
+    let skeleton = chain(6, 0.3);
+    let clip = swing_moving(&skeleton, 300, true);
+    let options = CompressOptions::peers();
+    let alone = on_1_2_3_threads(&clip, &skeleton, &options).swap_remove(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let done = std::sync::atomic::AtomicBool::new(false);
+    let busy = pool.install(|| {
+        rayon::scope(|scope| {
+            scope.spawn(|_| {
+                while !done.load(std::sync::atomic::Ordering::Acquire) {
+                    std::thread::yield_now();
+                }
+            });
+            let out = compress_clip(&clip, Some(&skeleton), &options);
+            done.store(true, std::sync::atomic::Ordering::Release);
+            out
+        })
+    });
+    assert!(busy.0.is_compressed());
+    assert_eq!(busy.0, alone.0);
+    assert_eq!(busy.1, alone.1);
+}
+
+#[test]
 fn the_times_a_try_measures_first_change_neither_its_verdict_nor_what_it_commits() {
     // Tries on every segment and on the root's, a middle joint's and the last joint's
     // components, two bits down, at an infinite cap (the worst ratio, bit for bit) and at caps

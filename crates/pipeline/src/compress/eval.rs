@@ -174,6 +174,23 @@ const MAX_TIMES_PER_BLOCK: usize = 4096;
 const MIN_KEYS_PER_CHUNK: usize = 16;
 const MIN_TIMES_PER_CHUNK: usize = 16;
 
+/// Per chunk of `per` keys of `keys`, its range of each of `buffers` (per-key buffers, in order).
+fn key_chunks<T>(
+    buffers: &mut [Vec<T>],
+    keys: std::ops::Range<usize>,
+    per: usize,
+) -> Vec<Vec<&mut [T]>> {
+    let mut chunks: Vec<Vec<&mut [T]>> = (0..keys.len().div_ceil(per))
+        .map(|_| Vec::with_capacity(buffers.len()))
+        .collect();
+    for v in buffers {
+        for (c, s) in chunks.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
+            c.push(s);
+        }
+    }
+    chunks
+}
+
 /// One chunk of [`Eval::quantize_keys_side_by_side`]: its first key and its range of every
 /// per-key buffer (per component, per rotation, and the model rotations).
 struct KeyChunk<'s> {
@@ -439,38 +456,21 @@ impl<'a> Eval<'a> {
             std::mem::take(&mut self.raw),
             std::mem::take(&mut self.key_rot),
         );
-        let mut parts: Vec<KeyChunk> = keys
+        let parts: Vec<KeyChunk> = keys
             .clone()
             .step_by(per)
-            .map(|k0| KeyChunk {
+            .zip(key_chunks(&mut qi, keys.clone(), per))
+            .zip(key_chunks(&mut dec, keys.clone(), per))
+            .zip(key_chunks(&mut raw, keys.clone(), per))
+            .zip(rot[keys.start * nj..keys.end * nj].chunks_mut(per * nj))
+            .map(|((((k0, qi), dec), raw), rot)| KeyChunk {
                 k0,
-                qi: Vec::with_capacity(qi.len()),
-                dec: Vec::with_capacity(dec.len()),
-                raw: Vec::with_capacity(raw.len()),
-                rot: &mut [],
+                qi,
+                dec,
+                raw,
+                rot,
             })
             .collect();
-        for v in &mut qi {
-            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
-                p.qi.push(s);
-            }
-        }
-        for v in &mut dec {
-            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
-                p.dec.push(s);
-            }
-        }
-        for v in &mut raw {
-            for (p, s) in parts.iter_mut().zip(v[keys.clone()].chunks_mut(per)) {
-                p.raw.push(s);
-            }
-        }
-        for (p, s) in parts
-            .iter_mut()
-            .zip(rot[keys.start * nj..keys.end * nj].chunks_mut(per * nj))
-        {
-            p.rot = s;
-        }
         let state: &Eval = self;
         parts.into_par_iter().for_each(|mut p| {
             let mut row = KeyRow::default();

@@ -60,15 +60,26 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
         return;
     }
     let mut trial = Trial::default();
+    each_round(thresholds, |parity, limit| {
+        let mut changed = false;
+        for s in (parity..segs).step_by(2) {
+            changed |= state.refine_in_place(&mut trial, s, limit);
+        }
+        changed
+    });
+}
+
+/// The rounds of [`descend`]: `phase(parity, limit)` refines the segments of one parity at the
+/// round's threshold (true when it kept a try); the graded rounds, then rounds at 1 until one
+/// keeps nothing.
+fn each_round(thresholds: &[f32], mut phase: impl FnMut(usize, f32) -> bool) {
     let mut round = 0;
     loop {
         let limit = thresholds.get(round).copied().unwrap_or(1.0);
         round += 1;
         let mut changed = false;
         for parity in 0..2 {
-            for s in (parity..segs).step_by(2) {
-                changed |= state.refine_in_place(&mut trial, s, limit);
-            }
+            changed |= phase(parity, limit);
         }
         if !changed && round >= thresholds.len() {
             break;
@@ -278,53 +289,45 @@ fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
         }
         let _over = OverOnDrop(&phases.over);
         let mut number = 0u64;
-        let mut round = 0;
-        loop {
-            let limit = thresholds.get(round).copied().unwrap_or(1.0);
-            round += 1;
-            let mut changed = false;
-            for parity in 0..2 {
-                let mut segments: Vec<usize> = (parity..segs).step_by(2).collect();
-                segments
-                    .sort_by_key(|&s| std::cmp::Reverse(phases.cost[s].load(Ordering::Relaxed)));
-                let count = segments.len();
-                number += 1;
-                *phases
+        each_round(thresholds, |parity, limit| {
+            let mut segments: Vec<usize> = (parity..segs).step_by(2).collect();
+            segments.sort_by_key(|&s| std::cmp::Reverse(phases.cost[s].load(Ordering::Relaxed)));
+            let count = segments.len();
+            number += 1;
+            *phases
+                .results
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner) = (0..count).map(|_| None).collect();
+            phases.done.store(0, Ordering::Release);
+            *phases.plan.write().unwrap_or_else(PoisonError::into_inner) =
+                (number, segments.clone(), limit);
+            phases.cursor.store(number << 32, Ordering::Release);
+            phases.work(number, &segments, limit, &state, &slots[0]);
+            wait_until(|| {
+                phases.done.load(Ordering::Acquire) == count
+                    || phases.failed.load(Ordering::Acquire)
+            });
+            assert!(
+                !phases.failed.load(Ordering::Acquire),
+                "a refinement helper panicked"
+            );
+            let mut results: Vec<Refined> = std::mem::take(
+                &mut *phases
                     .results
                     .lock()
-                    .unwrap_or_else(PoisonError::into_inner) = (0..count).map(|_| None).collect();
-                phases.done.store(0, Ordering::Release);
-                *phases.plan.write().unwrap_or_else(PoisonError::into_inner) =
-                    (number, segments.clone(), limit);
-                phases.cursor.store(number << 32, Ordering::Release);
-                phases.work(number, &segments, limit, &state, &slots[0]);
-                wait_until(|| {
-                    phases.done.load(Ordering::Acquire) == count
-                        || phases.failed.load(Ordering::Acquire)
-                });
-                assert!(
-                    !phases.failed.load(Ordering::Acquire),
-                    "a refinement helper panicked"
-                );
-                let mut results: Vec<Refined> = std::mem::take(
-                    &mut *phases
-                        .results
-                        .lock()
-                        .unwrap_or_else(PoisonError::into_inner),
-                )
-                .into_iter()
-                .flatten()
-                .collect();
-                results.sort_by_key(|r| r.0);
-                let mut state = state.write().unwrap_or_else(PoisonError::into_inner);
-                for refined in results {
-                    changed |= state.store(refined);
-                }
+                    .unwrap_or_else(PoisonError::into_inner),
+            )
+            .into_iter()
+            .flatten()
+            .collect();
+            results.sort_by_key(|r| r.0);
+            let mut state = state.write().unwrap_or_else(PoisonError::into_inner);
+            let mut changed = false;
+            for refined in results {
+                changed |= state.store(refined);
             }
-            if !changed && round >= thresholds.len() {
-                break;
-            }
-        }
+            changed
+        });
     });
 }
 

@@ -31,7 +31,9 @@ if [ "$#" -eq 0 ]; then
 fi
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-cargo build --quiet --release -p sinew-cli -p sinew-pipeline --example lod_peers
+# Two builds: with --example, cargo builds only the examples, not sinew-cli's binary.
+cargo build --quiet --release -p sinew-cli
+cargo build --quiet --release -p sinew-pipeline --example lod_peers
 inputs=()
 for input in "$@"; do
   case "$input" in

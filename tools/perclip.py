@@ -8,8 +8,8 @@ sinew: crates/pipeline's compress_time example at 0.001 @ 0.1, default effort, i
 (the machine's cores) and of 1, one run per fresh process; ACL 2.1's acl_compressor on
 gltf2acl.py's clip at the clip's own nominal rate (`sinew inspect` sample_rate), its reported
 compression_time. Medians of ROUNDS rounds, each round: sinew 2 threads, sinew 1 thread, ACL, for
-every file in turn. Build first: `cargo build --release -p sinew-cli -p sinew-pipeline --example
-compress_time`. PEERS_DIR: where ../shared/peers/install.sh built the peers (default /work/peers);
+every file in turn. Build first: `cargo build --release -p sinew-cli`, then `cargo build --release -p
+sinew-pipeline --example compress_time` (with --example cargo builds only the examples). PEERS_DIR: where ../shared/peers/install.sh built the peers (default /work/peers);
 SINEW_CORPUS: the corpus (default ../shared/corpus)."""
 import json, os, re, statistics, subprocess, sys, tempfile
 MAIN = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

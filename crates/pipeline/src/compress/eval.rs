@@ -64,19 +64,40 @@ impl<'a> Ctx<'a> {
         let poses = &sampled.poses;
         let src = Arc::clone(&sampled.points);
         let parents = rig.skeleton.parents();
-        let src_rot = poses
-            .iter()
-            .flat_map(|pose| {
-                let mut out: Vec<Quat> = Vec::with_capacity(pose.len());
-                for (j, t) in pose.iter().enumerate() {
-                    let p = parents.get(j).copied().flatten().map(usize::from);
-                    let pr = p.and_then(|p| out.get(p).copied());
-                    out.push(pr.map_or(t.rotation, |pr| pr * t.rotation));
-                }
-                out
-            })
-            .collect();
-        let src_flat = src.iter().flatten().copied().collect();
+        let nj = rig.skeleton.len();
+        // Each time's model rotations, and its error points, into its own rows of the flat
+        // tables: the same values whether the times go side by side or not.
+        let rotations_into = |(pose, out): (&Vec<Transform>, &mut [Quat])| {
+            for (j, t) in pose.iter().enumerate().take(out.len()) {
+                let p = parents.get(j).copied().flatten().map(usize::from);
+                let pr = p.filter(|&p| p < j).map(|p| out[p]);
+                out[j] = pr.map_or(t.rotation, |pr| pr * t.rotation);
+            }
+        };
+        let points_into = |(points, out): (&Vec<[Vec3; 3]>, &mut [[Vec3; 3]])| {
+            for (o, p) in out.iter_mut().zip(points) {
+                *o = *p;
+            }
+        };
+        let mut src_rot = vec![Quat::IDENTITY; poses.len() * nj];
+        let mut src_flat = vec![[Vec3::ZERO; 3]; src.len() * nj];
+        if nj > 0 && rig.side_by_side(poses.len()) {
+            poses
+                .par_iter()
+                .zip(src_rot.par_chunks_mut(nj))
+                .for_each(rotations_into);
+            src.par_iter()
+                .zip(src_flat.par_chunks_mut(nj))
+                .for_each(points_into);
+        } else if nj > 0 {
+            poses
+                .iter()
+                .zip(src_rot.chunks_mut(nj))
+                .for_each(rotations_into);
+            src.iter()
+                .zip(src_flat.chunks_mut(nj))
+                .for_each(points_into);
+        }
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
         let uniform = poses.iter().flatten().all(|t| {
             let (lo, hi) = (t.scale.min_element(), t.scale.max_element());

@@ -281,7 +281,7 @@ impl Rig {
     /// [`TIMES_PER_CHUNK`] side by side: from [`PARALLEL_VOLUME`] joint-times on, where the
     /// search's own work is spread too. Every time is computed alone, so the results are the same
     /// either way.
-    fn side_by_side(&self, times: usize) -> bool {
+    pub(super) fn side_by_side(&self, times: usize) -> bool {
         times > TIMES_PER_CHUNK && times * self.skeleton.len() >= PARALLEL_VOLUME
     }
 }

@@ -1,9 +1,11 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
 use super::metric::{fk, point_error, Rig};
+use rayon::prelude::*;
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
 use sinew_core::{Channel, Clip, Track, Transform};
+use std::borrow::Cow;
 
 /// A clip's channel values per key, ready to rebuild clips from.
 #[derive(Clone)]
@@ -187,16 +189,16 @@ pub(super) fn mean_quat(v: &[Quat]) -> Quat {
 /// times, so the same poses); else they are sampled here. Returns the simplified work's poses at
 /// `src_times` (`None` when the work makes no clip).
 #[allow(clippy::too_many_arguments)]
-pub(super) fn simplify_channels(
+pub(super) fn simplify_channels<'p>(
     work: &mut Work,
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
     src_times: &[f32],
-    poses: Option<&[Vec<Transform>]>,
+    poses: Option<&'p [Vec<Transform>]>,
     budget: f32,
     bind_allowed: bool,
-) -> Option<Vec<Vec<Transform>>> {
+) -> Option<Cow<'p, [Vec<Transform>]>> {
     let defaults: Vec<Option<Transform>> = work
         .tracks
         .iter()
@@ -213,9 +215,9 @@ pub(super) fn simplify_channels(
         })
         .collect();
     let local = match poses {
-        Some(poses) => poses.to_vec(),
+        Some(poses) => Cow::Borrowed(poses),
         None => match work.plain(like) {
-            Some(plain) => rig.poses(&plain, src_times),
+            Some(plain) => Cow::Owned(rig.poses(&plain, src_times)),
             None => return None,
         },
     };
@@ -324,26 +326,22 @@ pub(super) fn simplify_channels(
 /// The work's local poses and model transforms at every source time (time-major, one per rig
 /// joint), as the runtime sampler and [`super::metric`]'s forward kinematics give them, kept up to
 /// date as [`simplify_channels`] replaces tracks.
-struct SubtreeState<'a> {
-    local: Vec<Vec<Transform>>,
-    model: Vec<Vec<Affine3A>>,
+struct SubtreeState<'a, 'p> {
+    /// Borrowed until a channel is replaced (most clips' channels are kept as they are).
+    local: Cow<'p, [Vec<Transform>]>,
+    /// Worked out at the first try (the channels the source holds at their bind values need
+    /// none).
+    model: Option<Vec<Vec<Affine3A>>>,
+    rig: &'a Rig,
     /// Per joint: itself, then its descendants in skeleton order (the rig's).
     subtree: &'a [Vec<usize>],
     defaults: Vec<Transform>,
 }
 
-impl<'a> SubtreeState<'a> {
+impl<'a, 'p> SubtreeState<'a, 'p> {
     /// The state of the work whose poses at the source times are `local` (`additive`: the
     /// clip's kind).
-    fn new(rig: &'a Rig, local: Vec<Vec<Transform>>, additive: bool) -> SubtreeState<'a> {
-        let mut m = Vec::new();
-        let model = local
-            .iter()
-            .map(|p| {
-                fk(rig.skeleton.parents(), p, &mut m);
-                m.clone()
-            })
-            .collect();
+    fn new(rig: &'a Rig, local: Cow<'p, [Vec<Transform>]>, additive: bool) -> Self {
         let nj = rig.skeleton.len();
         let defaults = if additive {
             vec![Transform::IDENTITY; nj]
@@ -352,7 +350,8 @@ impl<'a> SubtreeState<'a> {
         };
         SubtreeState {
             local,
-            model,
+            model: None,
+            rig,
             subtree: &rig.subtree,
             defaults,
         }
@@ -374,15 +373,21 @@ impl<'a> SubtreeState<'a> {
         if !value.is_finite() {
             return false;
         }
+        if self.model.is_none() {
+            self.model = Some(self.models());
+        }
+        let Some(models) = self.model.as_ref() else {
+            return false;
+        };
         let parents = rig.skeleton.parents();
         let sub = &self.subtree[joint];
-        // Per time, the subtree's new model transforms (in `sub` order).
-        let mut new_model: Vec<Affine3A> = Vec::with_capacity(self.local.len() * sub.len());
         let mut at = vec![0usize; rig.skeleton.len()];
         for (n, &d) in sub.iter().enumerate() {
             at[d] = n;
         }
-        for ((local, model), src_k) in self.local.iter().zip(&self.model).zip(src) {
+        // Per time, the subtree's new model transforms (in `sub` order).
+        let mut new_model: Vec<Affine3A> = Vec::with_capacity(self.local.len() * sub.len());
+        for ((local, model), src_k) in self.local.iter().zip(models).zip(src) {
             let base = new_model.len();
             for (n, &d) in sub.iter().enumerate() {
                 let a = if n == 0 {
@@ -404,10 +409,14 @@ impl<'a> SubtreeState<'a> {
                 }
             }
         }
+        let Some(models) = self.model.as_mut() else {
+            return false;
+        };
         for ((local, model), new) in self
             .local
+            .to_mut()
             .iter_mut()
-            .zip(&mut self.model)
+            .zip(models)
             .zip(new_model.chunks_exact(sub.len()))
         {
             local[joint] = value.applied(local[joint]);
@@ -416,6 +425,21 @@ impl<'a> SubtreeState<'a> {
             }
         }
         true
+    }
+
+    /// The model transforms of the state's poses (forward kinematics at every time; a long
+    /// clip's times side by side, each computed alone: the same values either way).
+    fn models(&self) -> Vec<Vec<Affine3A>> {
+        let model_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
+            fk(self.rig.skeleton.parents(), p, m);
+            m.clone()
+        };
+        if self.rig.side_by_side(self.local.len()) {
+            self.local.par_iter().map_init(Vec::new, model_of).collect()
+        } else {
+            let mut m = Vec::new();
+            self.local.iter().map(|p| model_of(&mut m, p)).collect()
+        }
     }
 }
 

@@ -639,8 +639,12 @@ impl<'a> Eval<'a> {
     /// transforms `model` (one per joint), or `None` when one exceeds its limit.
     fn time_ratio(&self, i: usize, model: &[Affine3A]) -> Option<f32> {
         let mut worst = 0.0f32;
-        for (j, m) in model.iter().enumerate() {
-            let (error, limit) = (self.error_at(i, j, m), self.ctx.limits[j]);
+        let nj = self.nj.min(model.len());
+        let src = &self.ctx.src_flat[i * self.nj..i * self.nj + nj];
+        let (scales, limits) = (&self.ctx.rig.point_scale[..nj], &self.ctx.limits[..nj]);
+        for j in 0..nj {
+            let error = point_distance(&src[j], scales[j], &model[j]);
+            let limit = limits[j];
             if exceeds(error, limit) {
                 return None;
             }
@@ -729,15 +733,11 @@ impl<'a> Eval<'a> {
     /// root is monotonic and correctly rounded): the same value as measuring each distance.
     #[inline]
     pub(super) fn error_at(&self, i: usize, j: usize, m: &Affine3A) -> f32 {
-        let c = self.ctx.rig.point_scale[j];
-        let s = &self.ctx.src_flat[i * self.nj + j];
-        let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
-        let mut worst = 0.0f32;
-        for (axis, src) in axes.iter().zip(s) {
-            let d = Vec3::from(*axis * c + m.translation) - *src;
-            worst = worst.max(d.x * d.x + d.y * d.y + d.z * d.z);
-        }
-        worst.sqrt()
+        point_distance(
+            &self.ctx.src_flat[i * self.nj + j],
+            self.ctx.rig.point_scale[j],
+            m,
+        )
     }
 
     /// True when every joint is within its limit at every source time.
@@ -753,6 +753,20 @@ impl<'a> Eval<'a> {
         self.layout
             .encode(&self.bits, &self.qi, work, self.ctx.like)
     }
+}
+
+/// The largest distance of the error points of model transform `m` (its axes scaled by `scale`,
+/// the rig's `point_scale`, plus its translation) from the source's points `src`
+/// ([`Eval::error_at`]).
+#[inline]
+pub(super) fn point_distance(src: &[Vec3; 3], scale: f32, m: &Affine3A) -> f32 {
+    let axes = [m.matrix3.x_axis, m.matrix3.y_axis, m.matrix3.z_axis];
+    let mut worst = 0.0f32;
+    for (axis, src) in axes.iter().zip(src) {
+        let d = Vec3::from(*axis * scale + m.translation) - *src;
+        worst = worst.max(d.x * d.x + d.y * d.y + d.z * d.z);
+    }
+    worst.sqrt()
 }
 
 /// What refining one segment writes in an [`Eval`] ([`Eval::segment_state`]): the segment's

@@ -13,7 +13,7 @@
 //! rotation components, quantization parameters), so the per-key and per-time loops index flat
 //! buffers only.
 
-use super::eval::Eval;
+use super::eval::{point_distance, Eval};
 use super::metric::exceeds;
 use super::quantize::{raw_rotation, Kind, Quant};
 use sinew_core::clip::{nlerp, normalize_rotation};
@@ -79,24 +79,54 @@ pub(super) struct Trial {
     /// model rotation, valid likewise.
     raw: Vec<Quat>,
     key_rot: Vec<Quat>,
-    /// Per source time of the segment, per subtree joint: local and model transforms, written.
-    local_aff: Vec<Affine3A>,
-    local_set: Vec<bool>,
-    model: Vec<Affine3A>,
-    model_set: Vec<bool>,
-    /// Per subtree joint: its values changed / its model transforms changed.
+    /// Per subtree joint: its values changed.
     dirty: Vec<bool>,
-    moved: Vec<bool>,
-    /// Per source time of the segment, per subtree joint: measured already, and the ratio of its
-    /// error to its limit found then.
-    seen: Vec<bool>,
-    ratio: Vec<f32>,
+    /// What the trial's measurements write ([`Timed`]).
+    t: Timed,
     /// The largest ratio of error to limit over the joints and times that changed, or infinity
     /// when one exceeded the cap (the trial then stopped there).
     pub(super) worst: f32,
     /// Where a failed trial stopped: the position of that time among the segment's source times
     /// (`usize::MAX` when it was not one time's first measurement).
     pub(super) failed_at: usize,
+}
+
+/// The buffers a trial's measurements write, apart from the rest of the [`Trial`] so that a
+/// measurement can write them while reading the rest (each time's row of them a slice of its own).
+#[derive(Default)]
+struct Timed {
+    /// Per source time of the segment, per subtree joint: local and model transforms, written.
+    local_aff: Vec<Affine3A>,
+    local_set: Vec<bool>,
+    model: Vec<Affine3A>,
+    model_set: Vec<bool>,
+    /// Per subtree joint: its model transforms changed.
+    moved: Vec<bool>,
+    /// Per source time of the segment, per subtree joint: measured already, and the ratio of its
+    /// error to its limit found then.
+    seen: Vec<bool>,
+    ratio: Vec<f32>,
+}
+
+impl Timed {
+    /// The model transform of subtree joint `n` (joint `d`) at the segment's time `pos` (source
+    /// time `i`): the trial's where it wrote one, else the state's.
+    fn model_of(
+        &self,
+        e: &Eval,
+        nsub: usize,
+        pos: usize,
+        i: usize,
+        n: usize,
+        d: usize,
+    ) -> Affine3A {
+        let at = pos * nsub + n;
+        if self.model_set[at] {
+            self.model[at]
+        } else {
+            e.model[(i - e.first_time) * e.nj + d]
+        }
+    }
 }
 
 impl Trial {
@@ -145,15 +175,35 @@ impl Trial {
         reset(&mut self.key_done, self.nk, false);
         reset(&mut self.reached, self.nk, 0);
         let poses = times.len() * self.nsub;
-        for v in [&mut self.local_aff, &mut self.model] {
+        for v in [&mut self.t.local_aff, &mut self.t.model] {
             grow(v, poses, Affine3A::IDENTITY);
         }
-        for f in [&mut self.local_set, &mut self.model_set, &mut self.seen] {
+        for f in [
+            &mut self.t.local_set,
+            &mut self.t.model_set,
+            &mut self.t.seen,
+        ] {
             reset(f, poses, false);
         }
-        grow(&mut self.ratio, poses, 0.0);
+        grow(&mut self.t.ratio, poses, 0.0);
         reset(&mut self.dirty, self.nsub, false);
-        reset(&mut self.moved, self.nsub, false);
+        reset(&mut self.t.moved, self.nsub, false);
+        // The measurements write `t` while they read the rest of the trial.
+        let mut t = std::mem::take(&mut self.t);
+        self.measure_all(&mut t, e, keys, times, cap, probes);
+        self.t = t;
+    }
+
+    /// The measuring part of [`Trial::run`], writing `t`.
+    fn measure_all(
+        &mut self,
+        t: &mut Timed,
+        e: &Eval,
+        keys: std::ops::Range<usize>,
+        times: &[usize],
+        cap: f32,
+        probes: &[usize],
+    ) {
         let nsub = self.nsub;
         let mut worst = 0.0f32;
         let mut failed = false;
@@ -185,7 +235,7 @@ impl Trial {
             for k in reads(i) {
                 self.requantize_once(e, k);
             }
-            match self.measure_time(e, p, i, cap) {
+            match self.measure_time(t, e, p, i, cap) {
                 Some(r) => worst = worst.max(r),
                 None => {
                     self.failed_at = p;
@@ -206,7 +256,7 @@ impl Trial {
             if probes.contains(&pos) {
                 continue;
             }
-            match self.measure_time(e, pos, i, cap) {
+            match self.measure_time(t, e, pos, i, cap) {
                 Some(r) => worst = worst.max(r),
                 None => {
                     failed = true;
@@ -223,15 +273,15 @@ impl Trial {
             'late: for (pos, &i) in times.iter().enumerate() {
                 for n in 0..nsub {
                     let row = self.rows[n];
-                    let below = row.np != NONE && self.moved[row.np];
-                    self.moved[n] = self.dirty[n] || below;
-                    if !self.moved[n] || self.seen[pos * nsub + n] {
+                    let below = row.np != NONE && t.moved[row.np];
+                    t.moved[n] = self.dirty[n] || below;
+                    if !t.moved[n] || t.seen[pos * nsub + n] {
                         continue;
                     }
-                    let m = self.model_of(e, pos, i, n, row.d);
+                    let m = t.model_of(e, nsub, pos, i, n, row.d);
                     let r = e.error_at(i, row.d, &m) / e.ctx.limits[row.d];
-                    self.seen[pos * nsub + n] = true;
-                    self.ratio[pos * nsub + n] = r;
+                    t.seen[pos * nsub + n] = true;
+                    t.ratio[pos * nsub + n] = r;
                     if exceeds(r, cap) {
                         failed = true;
                         break 'late;
@@ -288,25 +338,38 @@ impl Trial {
 
     /// Resamples the subtree at the segment's time `pos` (source time `i`) and measures the joints
     /// that moved: the largest ratio of error to limit, or `None` at the first over `cap`.
-    fn measure_time(&mut self, e: &Eval, pos: usize, i: usize, cap: f32) -> Option<f32> {
+    fn measure_time(&self, t: &mut Timed, e: &Eval, pos: usize, i: usize, cap: f32) -> Option<f32> {
         let nsub = self.nsub;
         let nj = e.nj;
+        // This time's row of each buffer, and the state's transforms at this time.
+        let row_of = pos * nsub..(pos + 1) * nsub;
+        let (rows, dirty) = (&self.rows[..nsub], &self.dirty[..nsub]);
+        let moved = &mut t.moved[..nsub];
+        let local_aff = &mut t.local_aff[row_of.clone()];
+        let local_set = &mut t.local_set[row_of.clone()];
+        let model = &mut t.model[row_of.clone()];
+        let model_set = &mut t.model_set[row_of.clone()];
+        let seen = &mut t.seen[row_of.clone()];
+        let ratio = &mut t.ratio[row_of];
+        let state_row = (i - e.first_time) * nj..(i - e.first_time + 1) * nj;
+        let (state_local, state_model) = (&e.local_aff[state_row.clone()], &e.model[state_row]);
+        let src = &e.ctx.src_flat[i * nj..(i + 1) * nj];
+        let (scales, limits) = (&e.ctx.rig.point_scale[..nj], &e.ctx.limits[..nj]);
         let mut worst = 0.0f32;
         for n in 0..nsub {
-            let row = self.rows[n];
-            let below = row.np != NONE && self.moved[row.np];
-            let moved = self.dirty[n] || below;
-            self.moved[n] = moved;
-            if !moved {
+            let row = rows[n];
+            let below = row.np != NONE && moved[row.np];
+            let is_moved = dirty[n] || below;
+            moved[n] = is_moved;
+            if !is_moved {
                 continue;
             }
-            let at = pos * nsub + n;
             let d = row.d;
-            let local = if self.dirty[n] {
+            let local = if dirty[n] {
                 // Only the changed translation or scale component, or the subtree's rotations,
                 // differ from the state: the rest of the local transform is the state's (the
                 // values `Transform::to_affine` of the sampled pose gives, bit for bit).
-                let state = e.local_aff[(i - e.first_time) * nj + d];
+                let state = state_local[d];
                 let a = match (self.kind, row.fixed_scale) {
                     (Some(Kind::R), Some(scale)) if row.fr != NONE => {
                         let (k0, k1, alpha) = e.at[i];
@@ -347,27 +410,27 @@ impl Trial {
                     }
                     _ => self.sampled_local(e, n, i).to_affine(),
                 };
-                self.local_aff[at] = a;
-                self.local_set[at] = true;
+                local_aff[n] = a;
+                local_set[n] = true;
                 a
-            } else if self.local_set[at] {
-                self.local_aff[at]
+            } else if local_set[n] {
+                local_aff[n]
             } else {
-                e.local_aff[(i - e.first_time) * nj + d]
+                state_local[d]
             };
             let pm = if row.pj == NONE {
                 Affine3A::IDENTITY
-            } else if row.np != NONE {
-                self.model_of(e, pos, i, row.np, row.pj)
+            } else if row.np != NONE && model_set[row.np] {
+                model[row.np]
             } else {
-                e.model[(i - e.first_time) * nj + row.pj]
+                state_model[row.pj]
             };
             let m = pm * local;
-            self.model[at] = m;
-            self.model_set[at] = true;
-            self.seen[at] = true;
-            let r = e.error_at(i, d, &m) / e.ctx.limits[d];
-            self.ratio[at] = r;
+            model[n] = m;
+            model_set[n] = true;
+            seen[n] = true;
+            let r = point_distance(&src[d], scales[d], &m) / limits[d];
+            ratio[n] = r;
             if exceeds(r, cap) {
                 return None;
             }
@@ -433,14 +496,24 @@ impl Trial {
             }
         }
         let times = std::mem::take(&mut e.seg_times[self.s]);
+        let nsub = self.nsub;
         for (pos, &i) in times.iter().enumerate() {
-            for (n, row) in self.rows.iter().enumerate() {
-                let at = pos * self.nsub + n;
-                if self.local_set[at] {
-                    e.local_aff[(i - e.first_time) * nj + row.d] = self.local_aff[at];
+            // This time's rows of the trial's buffers and of the state's.
+            let ours = pos * nsub..(pos + 1) * nsub;
+            let (local_set, local_aff) = (
+                &self.t.local_set[ours.clone()],
+                &self.t.local_aff[ours.clone()],
+            );
+            let (model_set, model) = (&self.t.model_set[ours.clone()], &self.t.model[ours]);
+            let theirs = (i - e.first_time) * nj..(i - e.first_time + 1) * nj;
+            let state_local = &mut e.local_aff[theirs.clone()];
+            let state_model = &mut e.model[theirs];
+            for (n, row) in self.rows[..nsub].iter().enumerate() {
+                if local_set[n] {
+                    state_local[row.d] = local_aff[n];
                 }
-                if self.model_set[at] {
-                    e.model[(i - e.first_time) * nj + row.d] = self.model[at];
+                if model_set[n] {
+                    state_model[row.d] = model[n];
                 }
             }
         }
@@ -452,16 +525,16 @@ impl Trial {
     /// position. (A kept trial measures every time of a joint that moved.)
     pub(super) fn moved_worst(&self) -> impl Iterator<Item = (usize, f32, usize)> + '_ {
         let nsub = self.nsub;
-        let times = self.seen.len() / nsub.max(1);
+        let times = self.t.seen.len() / nsub.max(1);
         self.rows
             .iter()
             .enumerate()
-            .filter(move |&(n, _)| self.moved[n])
+            .filter(move |&(n, _)| self.t.moved[n])
             .map(move |(n, row)| {
                 let mut best = (0.0f32, 0usize);
                 for pos in 0..times {
-                    let r = self.ratio[pos * nsub + n];
-                    if self.seen[pos * nsub + n] && r > best.0 {
+                    let r = self.t.ratio[pos * nsub + n];
+                    if self.t.seen[pos * nsub + n] && r > best.0 {
                         best = (r, pos);
                     }
                 }
@@ -546,17 +619,6 @@ impl Trial {
             }
             self.key_rot[n * nk + kk] = pr * rot;
             self.reached[kk] = n + 1;
-        }
-    }
-
-    /// Subtree joint `n` (`d`)'s model transform at the segment's time `pos` (source time `i`).
-    #[inline]
-    fn model_of(&self, e: &Eval, pos: usize, i: usize, n: usize, d: usize) -> Affine3A {
-        let at = pos * self.nsub + n;
-        if self.model_set[at] {
-            self.model[at]
-        } else {
-            e.model[(i - e.first_time) * e.nj + d]
         }
     }
 }

@@ -5,7 +5,8 @@ docs/performance.md, sessions 16 to 18).
 perclip.py ROUNDS OUT.md FILE...   (corpus-relative paths)
 
 sinew: crates/pipeline's compress_time example at 0.001 @ 0.1, default effort, in a pool of 2 threads
-(the machine's cores) and of 1, one run per fresh process; ACL 2.1's acl_compressor on
+(the machine's cores) and of 1, one run per fresh process, the encoder timed on the pool thread that
+runs it (SINEW_TIME_HANDOFF=1: with the hand-off to the pool and back, as until session 19); ACL 2.1's acl_compressor on
 gltf2acl.py's clip at the clip's own nominal rate (`sinew inspect` sample_rate), its reported
 compression_time. Medians of ROUNDS rounds, each round: sinew 2 threads, sinew 1 thread, ACL, for
 every file in turn. Build first: `cargo build --release -p sinew-cli`, then `cargo build --release -p

@@ -639,8 +639,15 @@ pub fn compress_clip(
     skeleton: Option<&Skeleton>,
     options: &CompressOptions,
 ) -> (Clip, ClipCompressionReport) {
-    let source = clip.to_plain();
-    let extent = skeleton.map_or_else(|| clip_extent(&source), skeleton_extent);
+    // A plain clip is its own source (not copied: a long capture is megabytes).
+    let decoded;
+    let source: &Clip = if clip.is_compressed() {
+        decoded = clip.to_plain();
+        &decoded
+    } else {
+        clip
+    };
+    let extent = skeleton.map_or_else(|| clip_extent(source), skeleton_extent);
     let tolerance = options
         .tolerance
         .filter(|t| t.is_finite() && *t > 0.0)
@@ -650,14 +657,14 @@ pub fn compress_clip(
         .filter(|t| t.is_finite() && *t >= 0.0)
         .unwrap_or(DEFAULT_RELATIVE_DISTANCE * extent);
     let mut best: Option<Found> = None;
-    let rig = Rig::new(&source, skeleton, distance);
+    let rig = Rig::new(source, skeleton, distance);
     let whole = rig
         .as_ref()
-        .map(|rig| (rig, Sampled::new(rig, &source, source.times())));
+        .map(|rig| (rig, Sampled::new(rig, source, source.times())));
     if let Some((rig, whole)) = &whole {
-        best = search(&source, whole, rig, tolerance, skeleton.is_some(), options);
+        best = search(source, whole, rig, tolerance, skeleton.is_some(), options);
     }
-    let plain_bytes = clip_record_size(&source);
+    let plain_bytes = clip_record_size(source);
     let (out, measured, compressed_bytes) = match best {
         Some((size, clip, errors)) if size < plain_bytes => (clip, Some(errors), size),
         _ => (source.clone(), None, plain_bytes),
@@ -667,7 +674,7 @@ pub fn compress_clip(
     let mut errors = match (measured, &whole) {
         (Some(errors), _) => errors,
         (None, Some((rig, whole))) => errors_against(rig, &whole.points, &out, source.times()),
-        (None, None) => measure(&source, &out, skeleton, distance),
+        (None, None) => measure(source, &out, skeleton, distance),
     };
     let max_error = errors.iter().copied().fold(0.0, f32::max);
     let p99_error = percentile(&mut errors, 0.99);

@@ -81,23 +81,9 @@ impl<'a> Ctx<'a> {
         };
         let mut src_rot = vec![Quat::IDENTITY; poses.len() * nj];
         let mut src_flat = vec![[Vec3::ZERO; 3]; src.len() * nj];
-        if nj > 0 && rig.side_by_side(poses.len()) {
-            poses
-                .par_iter()
-                .zip(src_rot.par_chunks_mut(nj))
-                .for_each(rotations_into);
-            src.par_iter()
-                .zip(src_flat.par_chunks_mut(nj))
-                .for_each(points_into);
-        } else if nj > 0 {
-            poses
-                .iter()
-                .zip(src_rot.chunks_mut(nj))
-                .for_each(rotations_into);
-            src.iter()
-                .zip(src_flat.chunks_mut(nj))
-                .for_each(points_into);
-        }
+        let par = rig.side_by_side(poses.len());
+        fill_rows(poses, &mut src_rot, nj, par, rotations_into);
+        fill_rows(src.as_slice(), &mut src_flat, nj, par, points_into);
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
         let uniform = poses.iter().flatten().all(|t| {
             let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
@@ -194,6 +180,28 @@ const TIMES_PER_BLOCK: usize = 256;
 const MAX_TIMES_PER_BLOCK: usize = 4096;
 const MIN_KEYS_PER_CHUNK: usize = 16;
 const MIN_TIMES_PER_CHUNK: usize = 16;
+
+/// `fill` on each of `items` with its row of `rows` (`width` entries per item), the items side by
+/// side when `par` (each row written by its item alone: the same values either way).
+fn fill_rows<I: Sync, O: Send>(
+    items: &[I],
+    rows: &mut [O],
+    width: usize,
+    par: bool,
+    fill: impl Fn((&I, &mut [O])) + Sync + Send,
+) {
+    if width == 0 {
+        return;
+    }
+    if par {
+        items
+            .par_iter()
+            .zip(rows.par_chunks_mut(width))
+            .for_each(fill);
+    } else {
+        items.iter().zip(rows.chunks_mut(width)).for_each(fill);
+    }
+}
 
 /// Per chunk of `per` keys of `keys`, its range of each of `buffers` (per-key buffers, in order).
 fn key_chunks<T>(

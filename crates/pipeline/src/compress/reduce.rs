@@ -332,7 +332,6 @@ struct SubtreeState<'a, 'p> {
     /// Worked out at the first try (the channels the source holds at their bind values need
     /// none).
     model: Option<Vec<Vec<Affine3A>>>,
-    rig: &'a Rig,
     /// Per joint: itself, then its descendants in skeleton order (the rig's).
     subtree: &'a [Vec<usize>],
     defaults: Vec<Transform>,
@@ -351,7 +350,6 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         SubtreeState {
             local,
             model: None,
-            rig,
             subtree: &rig.subtree,
             defaults,
         }
@@ -373,12 +371,9 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         if !value.is_finite() {
             return false;
         }
-        if self.model.is_none() {
-            self.model = Some(self.models());
-        }
-        let Some(models) = self.model.as_ref() else {
-            return false;
-        };
+        let models = self
+            .model
+            .get_or_insert_with(|| models_of(rig, &self.local));
         let parents = rig.skeleton.parents();
         let sub = &self.subtree[joint];
         let mut at = vec![0usize; rig.skeleton.len()];
@@ -387,7 +382,7 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         }
         // Per time, the subtree's new model transforms (in `sub` order).
         let mut new_model: Vec<Affine3A> = Vec::with_capacity(self.local.len() * sub.len());
-        for ((local, model), src_k) in self.local.iter().zip(models).zip(src) {
+        for ((local, model), src_k) in self.local.iter().zip(models.iter()).zip(src) {
             let base = new_model.len();
             for (n, &d) in sub.iter().enumerate() {
                 let a = if n == 0 {
@@ -409,9 +404,6 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
                 }
             }
         }
-        let Some(models) = self.model.as_mut() else {
-            return false;
-        };
         for ((local, model), new) in self
             .local
             .to_mut()
@@ -426,20 +418,20 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         }
         true
     }
+}
 
-    /// The model transforms of the state's poses (forward kinematics at every time; a long
-    /// clip's times side by side, each computed alone: the same values either way).
-    fn models(&self) -> Vec<Vec<Affine3A>> {
-        let model_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
-            fk(self.rig.skeleton.parents(), p, m);
-            m.clone()
-        };
-        if self.rig.side_by_side(self.local.len()) {
-            self.local.par_iter().map_init(Vec::new, model_of).collect()
-        } else {
-            let mut m = Vec::new();
-            self.local.iter().map(|p| model_of(&mut m, p)).collect()
-        }
+/// The model transforms of `local`'s poses (forward kinematics at every time; a long clip's times
+/// side by side, each computed alone: the same values either way).
+fn models_of(rig: &Rig, local: &[Vec<Transform>]) -> Vec<Vec<Affine3A>> {
+    let model_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
+        fk(rig.skeleton.parents(), p, m);
+        m.clone()
+    };
+    if rig.side_by_side(local.len()) {
+        local.par_iter().map_init(Vec::new, model_of).collect()
+    } else {
+        let mut m = Vec::new();
+        local.iter().map(|p| model_of(&mut m, p)).collect()
     }
 }
 
@@ -491,15 +483,21 @@ impl Replacement {
     }
 }
 
-/// Step 2: greedy key reduction. Returns the kept key indices.
+/// Step 2: greedy key reduction. Returns the kept key indices. `known`: the work's poses at its
+/// key times when they are known already (sampled once for several budgets); else they are
+/// sampled here.
 pub(super) fn reduce_keys(
     work: &Work,
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    known: Option<&[Vec<Transform>]>,
     budget: f32,
 ) -> Vec<usize> {
     let n = work.times.len();
+    if let Some(poses) = known.filter(|p| p.len() == n) {
+        return reduce_posed(&work.times, poses, rig, src, budget);
+    }
     if n <= 2 {
         return (0..n).collect();
     }
@@ -515,9 +513,8 @@ pub(super) fn reduce_keys(
     )
 }
 
-/// [`reduce_keys`] of a work whose poses at its key times (`times`) are `poses` (computed once
-/// for the several budgets of one work).
-pub(super) fn reduce_posed(
+/// [`reduce_keys`] of a work whose poses at its key times (`times`) are `poses`.
+fn reduce_posed(
     times: &[f32],
     poses: &[Vec<Transform>],
     rig: &Rig,

@@ -58,7 +58,7 @@ fn stopping_at_the_first_joint_over_the_budget_keeps_the_same_keys() {
         let src = rig.all_points(&rig.poses(&source, source.times()));
         let work = Work::from_plain(&source);
         for budget in [1e-6, 1e-4, 1e-3, 1e-2, 0.1] {
-            let kept = reduce_keys(&work, &source, &rig, &src, budget);
+            let kept = reduce_keys(&work, &source, &rig, &src, None, budget);
             assert_eq!(
                 kept,
                 reduce_keys_whole_poses(&work, &source, &rig, &src, budget),

@@ -10,7 +10,7 @@ use super::options::{
     MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
-use super::reduce::{reduce_keys, reduce_posed, simplify_channels, Work};
+use super::reduce::{reduce_keys, simplify_channels, Work};
 use super::refine::descend;
 use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
@@ -299,11 +299,9 @@ pub(super) fn compress_work(
     if options.key_reduction {
         // Each budget's reduction is independent of the others: computed in parallel, used in
         // order, on the poses the channel simplification leaves (the same work's, computed once).
-        let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| match &poses {
-            Some(poses) if base.times.as_slice() == times => {
-                reduce_posed(&base.times, poses, rig, src, tolerance * frac)
-            }
-            _ => reduce_keys(&base, source, rig, src, tolerance * frac),
+        let known = poses.as_deref().filter(|_| base.times.as_slice() == times);
+        let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| {
+            reduce_keys(&base, source, rig, src, known, tolerance * frac)
         });
         for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
@@ -616,10 +614,7 @@ pub(super) fn thinned(
 ) -> Option<Clip> {
     let times = source.times();
     let work = Work::from_plain(source);
-    let kept = match poses {
-        Some(poses) => reduce_posed(times, poses, rig, src, tolerance * THINNING),
-        None => reduce_keys(&work, source, rig, src, tolerance * THINNING),
-    };
+    let kept = reduce_keys(&work, source, rig, src, poses, tolerance * THINNING);
     if kept.len() * 5 > times.len() * 4 {
         return None;
     }

@@ -606,14 +606,29 @@ impl<'a> Eval<'a> {
     /// under its parent's model rotation `pr`: with chain compensation (at a source key), the
     /// local rotation that gives the joint's source model rotation; otherwise the source values.
     pub(super) fn rotation_values(&self, d: usize, c0: usize, k: usize, pr: Quat) -> [f32; 3] {
-        let index = self.layout.index[self.layout.comps[c0].rot][k];
-        match self.key_src[k] {
-            Some(i) if self.compensate => {
-                let target = (pr.inverse() * self.ctx.src_rot[i * self.nj + d]).normalize();
-                three_without(target, index)
-            }
-            _ => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
+        match self.compensated(d, k, pr) {
+            Some(u) => self.values_of(c0, k, u),
+            None => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
         }
+    }
+
+    /// With chain compensation at a source key: the rotation that gives joint `d` its source
+    /// model rotation under `pr`, before normalisation ([`Eval::values_of`] gives its stored
+    /// components). `None` where the stored components are the source values.
+    #[inline]
+    pub(super) fn compensated(&self, d: usize, k: usize, pr: Quat) -> Option<Quat> {
+        match self.key_src[k] {
+            Some(i) if self.compensate => Some(pr.inverse() * self.ctx.src_rot[i * self.nj + d]),
+            _ => None,
+        }
+    }
+
+    /// The three stored components of a compensated rotation ([`Eval::compensated`]) of the
+    /// rotation with first component `c0`, at key `k`.
+    #[inline]
+    pub(super) fn values_of(&self, c0: usize, k: usize, compensated: Quat) -> [f32; 3] {
+        let index = self.layout.index[self.layout.comps[c0].rot][k];
+        three_without(compensated.normalize(), index)
     }
 
     /// Computes every joint's local pose and model transform at source time `i` (parents first).

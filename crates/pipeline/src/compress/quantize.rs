@@ -132,6 +132,22 @@ impl Quant {
         };
         (q, self.bias + self.scale * q as f32)
     }
+
+    /// Whether every value within `margin` of `v` quantizes to `q` ([`Quant::quantize`]), given
+    /// `inv`, `1 / scale` as f32 rounds it: `v`'s place among the integers' rounding intervals,
+    /// worked out with a multiplication, must be inside `q`'s by more than the margin plus what
+    /// the rounding of this arithmetic and of `quantize`'s own may move it by (a few parts in
+    /// 1e7 of it). False for a NaN, and near the interval's ends, where it may be true.
+    pub(super) fn keeps(self, inv: f32, v: f32, margin: f32, q: u32) -> bool {
+        if self.scale <= 0.0 || self.top == 0 {
+            // Every value quantizes to 0.
+            return !v.is_nan();
+        }
+        let y = (v - self.bias) * inv;
+        let slack = margin * inv * 1.0001 + (y.abs() + 1.0) * 4e-7;
+        let f = y + 0.5 - q as f32;
+        (q == 0 || f >= slack) && (q >= self.top || f <= 1.0 - slack) && !v.is_nan()
+    }
 }
 
 /// The segment sub-range of values `keys` inside the clip range `lo .. lo + ext`: the 8-bit
@@ -511,4 +527,85 @@ pub(super) fn locate(like: &Clip, times: &[f32], t: f32) -> (usize, usize, f32) 
         return (c, c, 0.0);
     }
     (c, c + 1, (t - times[c]) / (times[c + 1] - times[c]))
+}
+
+#[cfg(test)]
+mod keeps_tests {
+    use super::Quant;
+
+    /// `keeps` is a sufficient condition: wherever it holds, every value within the margin (its
+    /// ends, the floats next to them and points between) quantizes to the same integer; and it
+    /// holds for most values away from an interval's ends (else the trials it saves would all
+    /// be made in full).
+    #[test]
+    fn a_kept_integer_is_the_integer_of_every_value_within_the_margin() {
+        let mut s = 0x9e37_79b9u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32
+        };
+        let (mut kept, mut centred) = (0, 0);
+        for case in 0..20_000 {
+            let bits = 1 + case % 16;
+            let top = (1u32 << bits) - 1;
+            // Ranges from a few float steps per integer to wide ones, around 0 and off it.
+            let extent = [1e-4f32, 1e-3, 0.05, 1.4][case % 4] * (0.5 + rnd());
+            let bias = (rnd() - 0.5) * 1.5;
+            let quant = Quant {
+                scale: extent / top as f32,
+                bias,
+                top,
+            };
+            let inv = 1.0 / quant.scale;
+            let (v, margin) = if case % 3 == 0 {
+                // A few float steps from an interval's end, with a margin of a few steps.
+                let k = (rnd() * top as f32) as u32;
+                let end = bias + quant.scale * (k as f32 + 0.5);
+                let ulp = end.abs() * f32::EPSILON + 1e-30;
+                (end + (rnd() - 0.5) * 16.0 * ulp, rnd() * 4.0 * ulp)
+            } else {
+                let v = bias + extent * (rnd() * 1.2 - 0.1);
+                (
+                    v,
+                    [0.0f32, 1e-7, 1e-6, quant.scale * 0.3][case % 4 / 2 + case % 2],
+                )
+            };
+            let q = quant.quantize(v).0;
+            if !quant.keeps(inv, v, margin, q) {
+                continue;
+            }
+            kept += 1;
+            for x in [
+                v - margin,
+                v + margin,
+                f32::from_bits((v - margin).to_bits().wrapping_sub(1)),
+                v,
+                v - margin * 0.5,
+                v + margin * 0.5,
+            ] {
+                if (x - v).abs() <= margin {
+                    assert_eq!(
+                        quant.quantize(x).0,
+                        q,
+                        "case {case}: {x} near {v} ± {margin}"
+                    );
+                }
+            }
+            let y = (v - bias) / quant.scale;
+            if (y - y.round()).abs() < 0.25 && margin < quant.scale * 0.1 && q > 0 && q < top {
+                centred += 1;
+            }
+        }
+        assert!(kept > 8_000, "{kept}");
+        assert!(centred > 1_000, "{centred}");
+        // NaN is never kept.
+        let quant = Quant {
+            scale: 0.01,
+            bias: 0.0,
+            top: 255,
+        };
+        assert!(!quant.keeps(100.0, f32::NAN, 0.0, 0));
+    }
 }

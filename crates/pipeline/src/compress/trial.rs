@@ -60,8 +60,10 @@ pub(super) struct Trial {
     nsub: usize,
     /// The subtree's joints, in subtree order.
     rows: Vec<Row>,
-    /// Per slot (as `qi`): the quantization parameters of that component in the segment.
+    /// Per slot (as `qi`): the quantization parameters of that component in the segment, and
+    /// the reciprocal of their scale (0 for none).
     slot_quant: Vec<Quant>,
+    slot_inv: Vec<f32>,
     /// The changed component's kind, and for a translation its channel's first component.
     kind: Option<Kind>,
     first_t: usize,
@@ -301,6 +303,7 @@ impl Trial {
         self.nsub = joints.len();
         self.rows.clear();
         self.slot_quant.clear();
+        self.slot_inv.clear();
         let nc = e.layout.comps.len();
         for (n, &d) in joints.iter().enumerate() {
             let track = e.track_of[d].unwrap_or(NONE);
@@ -331,6 +334,9 @@ impl Trial {
                     } else {
                         e.params[self.s * nc + x]
                     });
+                    let scale = self.slot_quant[self.slot_quant.len() - 1].scale;
+                    self.slot_inv
+                        .push(if scale > 0.0 { 1.0 / scale } else { 0.0 });
                 }
             }
         }
@@ -595,21 +601,49 @@ impl Trial {
             let mut rot = e.base[row.d].rotation;
             let mut rot_changed = false;
             if row.fr != NONE {
+                let at = k - e.first_key;
                 let index = e.layout.index[row.ri][k];
-                let vals = e.rotation_values(row.d, row.fr, k, pr);
-                let mut q = [0.0; 3];
-                for (a, &v) in vals.iter().enumerate() {
-                    let x = row.fr + a;
-                    let slot = 3 * n + a;
-                    let (qq, y) = self.slot_quant[slot].quantize(v);
-                    rot_changed |= qq != e.qi[x][k - e.first_key]
-                        || y.to_bits() != e.dec[x][k - e.first_key].to_bits();
-                    self.qi[slot * nk + kk] = qq;
-                    self.dec[slot * nk + kk] = y;
-                    q[a] = y;
-                }
-                self.dirty[n] |= rot_changed;
-                let raw = raw_rotation(index, q);
+                let compensated = e.compensated(row.d, k, pr);
+                // Below the changed joint (n > 0) only the parent's model rotation changed: where
+                // the new target certainly quantizes to the state's integers, the rotation is the
+                // state's (and without compensation it does not depend on the parent at all).
+                let kept = n > 0
+                    && compensated.is_none_or(|u| {
+                        let stored: [u32; 3] = std::array::from_fn(|a| e.qi[row.fr + a][at]);
+                        let slots = 3 * n..3 * n + 3;
+                        stays(
+                            u,
+                            index,
+                            &self.slot_quant[slots.clone()],
+                            &self.slot_inv[slots],
+                            stored,
+                        )
+                    });
+                let raw = if kept {
+                    for a in 0..3 {
+                        let slot = 3 * n + a;
+                        self.qi[slot * nk + kk] = e.qi[row.fr + a][at];
+                        self.dec[slot * nk + kk] = e.dec[row.fr + a][at];
+                    }
+                    e.raw[row.ri][at]
+                } else {
+                    let vals = match compensated {
+                        Some(u) => e.values_of(row.fr, k, u),
+                        None => [0, 1, 2].map(|a| e.layout.comps[row.fr + a].vals[k]),
+                    };
+                    let mut q = [0.0; 3];
+                    for (a, &v) in vals.iter().enumerate() {
+                        let x = row.fr + a;
+                        let slot = 3 * n + a;
+                        let (qq, y) = self.slot_quant[slot].quantize(v);
+                        rot_changed |= qq != e.qi[x][at] || y.to_bits() != e.dec[x][at].to_bits();
+                        self.qi[slot * nk + kk] = qq;
+                        self.dec[slot * nk + kk] = y;
+                        q[a] = y;
+                    }
+                    self.dirty[n] |= rot_changed;
+                    raw_rotation(index, q)
+                };
                 self.raw[n * nk + kk] = raw;
                 rot = normalize_rotation(raw);
             }
@@ -621,6 +655,34 @@ impl Trial {
             self.reached[kk] = n + 1;
         }
     }
+}
+
+/// Whether the compensated rotation `u` (before normalisation) certainly gives the stored
+/// integers `stored` with `quants` (the component `index` left out, [`Eval::values_of`]): its
+/// left-out component far enough from 0 that its sign (which sets the others') is the
+/// normalised one's, and each other component `v` within a margin that holds what the
+/// normalisation moves it by (at most `|v| (||u|^2 - 1| / 2 + 2.4e-7)`: the length's and the
+/// reciprocal's rounding) plus the rounding of `v` itself and of the margin's ends, doubled.
+fn stays(u: Quat, index: u8, quants: &[Quant], inv: &[f32], stored: [u32; 3]) -> bool {
+    let a = u.to_array();
+    let big = usize::from(index & 3);
+    if a[big].is_nan() || a[big].abs() <= 1e-6 {
+        return false;
+    }
+    let stretch = (u.length_squared() - 1.0).abs() + 5e-7;
+    let sign = if a[big] < 0.0 { -1.0 } else { 1.0 };
+    let mut k = 0;
+    for (i, &x) in a.iter().enumerate() {
+        if i == big {
+            continue;
+        }
+        let v = x * sign;
+        if !quants[k].keeps(inv[k], v, v.abs() * stretch + 2e-7, stored[k]) {
+            return false;
+        }
+        k += 1;
+    }
+    true
 }
 
 /// `v` holding `len` entries equal to `fill` (reusing its allocation): for flags.

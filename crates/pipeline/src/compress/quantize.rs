@@ -108,15 +108,26 @@ pub(super) struct Components {
     prefix: Arc<OnceLock<Option<usize>>>,
 }
 
-/// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`.
+/// How one component of one segment is quantized: `value = bias + scale * q`, `q <= top`; `inv`
+/// is `1 / scale` as f32 rounds it (0 without a scale), for [`Quant::keeps`].
 #[derive(Clone, Copy, Default)]
 pub(super) struct Quant {
     pub(super) scale: f32,
     pub(super) bias: f32,
     pub(super) top: u32,
+    inv: f32,
 }
 
 impl Quant {
+    pub(super) fn new(scale: f32, bias: f32, top: u32) -> Quant {
+        Quant {
+            scale,
+            bias,
+            top,
+            inv: if scale > 0.0 { 1.0 / scale } else { 0.0 },
+        }
+    }
+
     /// The stored integer nearest to `v` and the value it decodes to (as the decoder computes it).
     pub(super) fn quantize(self, v: f32) -> (u32, f32) {
         // Round to nearest (halves up) by truncation, which needs no libm call.
@@ -133,12 +144,12 @@ impl Quant {
         (q, self.bias + self.scale * q as f32)
     }
 
-    /// Whether every value within `margin` of `v` quantizes to `q` ([`Quant::quantize`]), given
-    /// `inv`, `1 / scale` as f32 rounds it: `v`'s place among the integers' rounding intervals,
+    /// Whether every value within `margin` of `v` quantizes to `q` ([`Quant::quantize`]): `v`'s place among the integers' rounding intervals,
     /// worked out with a multiplication, must be inside `q`'s by more than the margin plus what
     /// the rounding of this arithmetic and of `quantize`'s own may move it by (a few parts in
     /// 1e7 of it). False for a NaN, and near the interval's ends, where it may be true.
-    pub(super) fn keeps(self, inv: f32, v: f32, margin: f32, q: u32) -> bool {
+    pub(super) fn keeps(self, v: f32, margin: f32, q: u32) -> bool {
+        let inv = self.inv;
         if self.scale <= 0.0 || self.top == 0 {
             // Every value quantizes to 0.
             return !v.is_nan();
@@ -350,11 +361,7 @@ impl Layout {
             ..self.sub[s * self.comps.len() + c]
         };
         let (scale, bias) = dequant_params(self.ranges[c], e);
-        Quant {
-            scale,
-            bias,
-            top: ((1u64 << bits) - 1) as u32,
-        }
+        Quant::new(scale, bias, ((1u64 << bits) - 1) as u32)
     }
 
     /// First bit widths (per segment, per component): the fewest whose a-priori error bound
@@ -553,12 +560,7 @@ mod keeps_tests {
             // Ranges from a few float steps per integer to wide ones, around 0 and off it.
             let extent = [1e-4f32, 1e-3, 0.05, 1.4][case % 4] * (0.5 + rnd());
             let bias = (rnd() - 0.5) * 1.5;
-            let quant = Quant {
-                scale: extent / top as f32,
-                bias,
-                top,
-            };
-            let inv = 1.0 / quant.scale;
+            let quant = Quant::new(extent / top as f32, bias, top);
             let (v, margin) = if case % 3 == 0 {
                 // A few float steps from an interval's end, with a margin of a few steps.
                 let k = (rnd() * top as f32) as u32;
@@ -573,7 +575,7 @@ mod keeps_tests {
                 )
             };
             let q = quant.quantize(v).0;
-            if !quant.keeps(inv, v, margin, q) {
+            if !quant.keeps(v, margin, q) {
                 continue;
             }
             kept += 1;
@@ -601,11 +603,7 @@ mod keeps_tests {
         assert!(kept > 8_000, "{kept}");
         assert!(centred > 1_000, "{centred}");
         // NaN is never kept.
-        let quant = Quant {
-            scale: 0.01,
-            bias: 0.0,
-            top: 255,
-        };
-        assert!(!quant.keeps(100.0, f32::NAN, 0.0, 0));
+        let quant = Quant::new(0.01, 0.0, 255);
+        assert!(!quant.keeps(f32::NAN, 0.0, 0));
     }
 }

@@ -60,10 +60,12 @@ pub(super) struct Trial {
     nsub: usize,
     /// The subtree's joints, in subtree order.
     rows: Vec<Row>,
-    /// Per slot (as `qi`): the quantization parameters of that component in the segment, and
-    /// the reciprocal of their scale (0 for none).
+    /// Per joint, its subtree's rows once looked up ([`Trial::set_rows`]), for the layout at this
+    /// address.
+    row_cache: Vec<Vec<Row>>,
+    rows_of_layout: usize,
+    /// Per slot (as `qi`): the quantization parameters of that component in the segment.
     slot_quant: Vec<Quant>,
-    slot_inv: Vec<f32>,
     /// The changed component's kind, and for a translation its channel's first component.
     kind: Option<Kind>,
     first_t: usize,
@@ -295,48 +297,36 @@ impl Trial {
         self.worst = if failed { f32::INFINITY } else { worst };
     }
 
-    /// Looks up the subtree's rows and the quantization parameters of the slots the trial
-    /// requantizes.
+    /// Looks up the subtree's rows (once per joint: they depend on the state's layout alone) and
+    /// the quantization parameters of the slots the trial requantizes.
     fn set_rows(&mut self, e: &Eval) {
-        let joints = &e.subtree[self.j];
-        let parents = &e.subtree_parent[self.j];
-        self.nsub = joints.len();
+        let layout = std::ptr::from_ref(e.layout) as usize;
+        if self.rows_of_layout != layout {
+            self.row_cache.clear();
+            self.rows_of_layout = layout;
+        }
+        if self.row_cache.len() < e.nj {
+            self.row_cache.resize_with(e.nj, Vec::new);
+        }
+        if self.row_cache[self.j].is_empty() {
+            self.row_cache[self.j] = subtree_rows(e, self.j);
+        }
         self.rows.clear();
+        self.rows.extend_from_slice(&self.row_cache[self.j]);
+        self.nsub = self.rows.len();
         self.slot_quant.clear();
-        self.slot_inv.clear();
-        let nc = e.layout.comps.len();
-        for (n, &d) in joints.iter().enumerate() {
-            let track = e.track_of[d].unwrap_or(NONE);
-            let fr = e.track_of[d]
-                .and_then(|tr| e.first[tr][Kind::R as usize])
-                .unwrap_or(NONE);
-            let scaled = e.track_of[d].is_some_and(|tr| e.first[tr][Kind::S as usize].is_some());
-            self.rows.push(Row {
-                d,
-                np: if n > 0 { parents[n] } else { NONE },
-                pj: e.parent(d).unwrap_or(NONE),
-                track,
-                fr,
-                ri: if fr == NONE {
-                    0
-                } else {
-                    e.layout.comps[fr].rot
-                },
-                fixed_scale: (!scaled).then_some(e.base[d].scale),
-            });
-            if self.rot {
+        if self.rot {
+            let nc = e.layout.comps.len();
+            for row in &self.rows {
                 for a in 0..3 {
-                    let x = fr.wrapping_add(a);
-                    self.slot_quant.push(if fr == NONE {
+                    let x = row.fr.wrapping_add(a);
+                    self.slot_quant.push(if row.fr == NONE {
                         Quant::default()
                     } else if x == self.c {
                         self.quant
                     } else {
                         e.params[self.s * nc + x]
                     });
-                    let scale = self.slot_quant[self.slot_quant.len() - 1].scale;
-                    self.slot_inv
-                        .push(if scale > 0.0 { 1.0 / scale } else { 0.0 });
                 }
             }
         }
@@ -611,13 +601,7 @@ impl Trial {
                     && compensated.is_none_or(|u| {
                         let stored: [u32; 3] = std::array::from_fn(|a| e.qi[row.fr + a][at]);
                         let slots = 3 * n..3 * n + 3;
-                        stays(
-                            u,
-                            index,
-                            &self.slot_quant[slots.clone()],
-                            &self.slot_inv[slots],
-                            stored,
-                        )
+                        stays(u, index, &self.slot_quant[slots], stored)
                     });
                 let raw = if kept {
                     for a in 0..3 {
@@ -657,13 +641,41 @@ impl Trial {
     }
 }
 
+/// The rows of joint `j`'s subtree, in subtree order.
+fn subtree_rows(e: &Eval, j: usize) -> Vec<Row> {
+    let parents = &e.subtree_parent[j];
+    e.subtree[j]
+        .iter()
+        .enumerate()
+        .map(|(n, &d)| {
+            let fr = e.track_of[d]
+                .and_then(|tr| e.first[tr][Kind::R as usize])
+                .unwrap_or(NONE);
+            let scaled = e.track_of[d].is_some_and(|tr| e.first[tr][Kind::S as usize].is_some());
+            Row {
+                d,
+                np: if n > 0 { parents[n] } else { NONE },
+                pj: e.parent(d).unwrap_or(NONE),
+                track: e.track_of[d].unwrap_or(NONE),
+                fr,
+                ri: if fr == NONE {
+                    0
+                } else {
+                    e.layout.comps[fr].rot
+                },
+                fixed_scale: (!scaled).then_some(e.base[d].scale),
+            }
+        })
+        .collect()
+}
+
 /// Whether the compensated rotation `u` (before normalisation) certainly gives the stored
 /// integers `stored` with `quants` (the component `index` left out, [`Eval::values_of`]): its
 /// left-out component far enough from 0 that its sign (which sets the others') is the
 /// normalised one's, and each other component `v` within a margin that holds what the
 /// normalisation moves it by (at most `|v| (||u|^2 - 1| / 2 + 2.4e-7)`: the length's and the
 /// reciprocal's rounding) plus the rounding of `v` itself and of the margin's ends, doubled.
-fn stays(u: Quat, index: u8, quants: &[Quant], inv: &[f32], stored: [u32; 3]) -> bool {
+fn stays(u: Quat, index: u8, quants: &[Quant], stored: [u32; 3]) -> bool {
     let a = u.to_array();
     let big = usize::from(index & 3);
     if a[big].is_nan() || a[big].abs() <= 1e-6 {
@@ -677,7 +689,7 @@ fn stays(u: Quat, index: u8, quants: &[Quant], inv: &[f32], stored: [u32; 3]) ->
             continue;
         }
         let v = x * sign;
-        if !quants[k].keeps(inv[k], v, v.abs() * stretch + 2e-7, stored[k]) {
+        if !quants[k].keeps(v, v.abs() * stretch + 2e-7, stored[k]) {
             return false;
         }
         k += 1;

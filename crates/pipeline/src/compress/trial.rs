@@ -83,6 +83,9 @@ pub(super) struct Trial {
     /// model rotation, valid likewise.
     raw: Vec<Quat>,
     key_rot: Vec<Quat>,
+    /// Per subtree joint, per segment key: its stored integers (so its rotation) are the
+    /// state's, valid likewise (the trial's `qi` and `dec` of its slots are then not written).
+    same: Vec<bool>,
     /// Per subtree joint: its values changed.
     dirty: Vec<bool>,
     /// What the trial's measurements write ([`Timed`]).
@@ -176,6 +179,7 @@ impl Trial {
         for v in [&mut self.raw, &mut self.key_rot] {
             grow(v, self.nsub * self.nk, Quat::IDENTITY);
         }
+        grow(&mut self.same, self.nsub * self.nk, false);
         reset(&mut self.key_done, self.nk, false);
         reset(&mut self.reached, self.nk, 0);
         let poses = times.len() * self.nsub;
@@ -480,7 +484,7 @@ impl Trial {
             let k = self.key0 + kk - e.first_key;
             for (n, row) in self.rows.iter().enumerate().take(self.reached[kk]) {
                 let at = n * self.nk + kk;
-                if row.fr != NONE {
+                if row.fr != NONE && !self.same[at] {
                     for a in 0..3 {
                         let slot = (3 * n + a) * self.nk + kk;
                         e.qi[row.fr + a][k] = self.qi[slot];
@@ -604,11 +608,6 @@ impl Trial {
                         stays(u, index, &self.slot_quant[slots], stored)
                     });
                 let raw = if kept {
-                    for a in 0..3 {
-                        let slot = 3 * n + a;
-                        self.qi[slot * nk + kk] = e.qi[row.fr + a][at];
-                        self.dec[slot * nk + kk] = e.dec[row.fr + a][at];
-                    }
                     e.raw[row.ri][at]
                 } else {
                     let vals = match compensated {
@@ -628,6 +627,7 @@ impl Trial {
                     self.dirty[n] |= rot_changed;
                     raw_rotation(index, q)
                 };
+                self.same[n * nk + kk] = !rot_changed;
                 self.raw[n * nk + kk] = raw;
                 rot = normalize_rotation(raw);
             }

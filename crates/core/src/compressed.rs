@@ -212,6 +212,7 @@ pub fn smallest_three(q: Quat) -> (u8, [f32; 3]) {
 /// The three components of `q` other than component `index` (0-3), in order, sign-flipped so that
 /// component `index` is positive: what [`from_smallest_three`] rebuilds `q` from with that index,
 /// whether or not that component is the largest.
+#[inline]
 pub fn three_without(q: Quat, index: u8) -> [f32; 3] {
     let a = q.to_array();
     let big = usize::from(index & 3);

@@ -105,6 +105,7 @@ impl Transform {
     }
 
     /// The affine matrix `T * R * S`.
+    #[inline]
     pub fn to_affine(&self) -> Affine3A {
         Affine3A::from_scale_rotation_translation(self.scale, self.rotation, self.translation)
     }

@@ -576,7 +576,7 @@ impl<'a> Eval<'a> {
                 if let Some(c0) = fr {
                     let ri = self.layout.comps[c0].rot;
                     let index = self.layout.index[ri][k];
-                    let vals = self.rotation_values(d, c0, k, pr);
+                    let vals = self.values_of(c0, k, self.compensated(d, k, pr));
                     for (a, v) in vals.into_iter().enumerate() {
                         row.q[c0 + a] = self.params[s * nc + c0 + a].quantize(v);
                     }
@@ -602,19 +602,10 @@ impl<'a> Eval<'a> {
         self.key_rot[at * self.nj..(at + 1) * self.nj].copy_from_slice(&row.rot);
     }
 
-    /// The three stored components of joint `d`'s rotation (first component `c0`) at key `k`,
-    /// under its parent's model rotation `pr`: with chain compensation (at a source key), the
-    /// local rotation that gives the joint's source model rotation; otherwise the source values.
-    pub(super) fn rotation_values(&self, d: usize, c0: usize, k: usize, pr: Quat) -> [f32; 3] {
-        match self.compensated(d, k, pr) {
-            Some(u) => self.values_of(c0, k, u),
-            None => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
-        }
-    }
-
     /// With chain compensation at a source key: the rotation that gives joint `d` its source
-    /// model rotation under `pr`, before normalisation ([`Eval::values_of`] gives its stored
-    /// components). `None` where the stored components are the source values.
+    /// model rotation under its parent's model rotation `pr`, before normalisation
+    /// ([`Eval::values_of`] gives its stored components). `None` where the stored components are
+    /// the source values.
     #[inline]
     pub(super) fn compensated(&self, d: usize, k: usize, pr: Quat) -> Option<Quat> {
         match self.key_src[k] {
@@ -623,12 +614,17 @@ impl<'a> Eval<'a> {
         }
     }
 
-    /// The three stored components of a compensated rotation ([`Eval::compensated`]) of the
-    /// rotation with first component `c0`, at key `k`.
+    /// The three stored components of the rotation with first component `c0` at key `k`: those
+    /// of its compensated rotation ([`Eval::compensated`]), or the source values without one.
     #[inline]
-    pub(super) fn values_of(&self, c0: usize, k: usize, compensated: Quat) -> [f32; 3] {
-        let index = self.layout.index[self.layout.comps[c0].rot][k];
-        three_without(compensated.normalize(), index)
+    pub(super) fn values_of(&self, c0: usize, k: usize, compensated: Option<Quat>) -> [f32; 3] {
+        match compensated {
+            Some(u) => {
+                let index = self.layout.index[self.layout.comps[c0].rot][k];
+                three_without(u.normalize(), index)
+            }
+            None => [0, 1, 2].map(|a| self.layout.comps[c0 + a].vals[k]),
+        }
     }
 
     /// Computes every joint's local pose and model transform at source time `i` (parents first).

@@ -119,6 +119,7 @@ pub(super) struct Quant {
 }
 
 impl Quant {
+    /// The parameters `value = bias + scale * q`, `q <= top`, with their reciprocal scale.
     pub(super) fn new(scale: f32, bias: f32, top: u32) -> Quant {
         Quant {
             scale,
@@ -144,18 +145,18 @@ impl Quant {
         (q, self.bias + self.scale * q as f32)
     }
 
-    /// Whether every value within `margin` of `v` quantizes to `q` ([`Quant::quantize`]): `v`'s place among the integers' rounding intervals,
-    /// worked out with a multiplication, must be inside `q`'s by more than the margin plus what
-    /// the rounding of this arithmetic and of `quantize`'s own may move it by (a few parts in
-    /// 1e7 of it). False for a NaN, and near the interval's ends, where it may be true.
+    /// Whether every value within `margin` of `v` quantizes to `q` ([`Quant::quantize`]): `v`'s
+    /// place among the integers' rounding intervals, worked out with a multiplication, must be
+    /// inside `q`'s by more than the margin plus what the rounding of this arithmetic and of
+    /// `quantize`'s own may move it by (a few parts in 1e7 of it). False for a NaN, and near the
+    /// interval's ends, where it may be true.
     pub(super) fn keeps(self, v: f32, margin: f32, q: u32) -> bool {
-        let inv = self.inv;
         if self.scale <= 0.0 || self.top == 0 {
             // Every value quantizes to 0.
             return !v.is_nan();
         }
-        let y = (v - self.bias) * inv;
-        let slack = margin * inv * 1.0001 + (y.abs() + 1.0) * 4e-7;
+        let y = (v - self.bias) * self.inv;
+        let slack = margin * self.inv * 1.0001 + (y.abs() + 1.0) * 4e-7;
         let f = y + 0.5 - q as f32;
         (q == 0 || f >= slack) && (q >= self.top || f <= 1.0 - slack) && !v.is_nan()
     }

@@ -610,10 +610,7 @@ impl Trial {
                 let raw = if kept {
                     e.raw[row.ri][at]
                 } else {
-                    let vals = match compensated {
-                        Some(u) => e.values_of(row.fr, k, u),
-                        None => [0, 1, 2].map(|a| e.layout.comps[row.fr + a].vals[k]),
-                    };
+                    let vals = e.values_of(row.fr, k, compensated);
                     let mut q = [0.0; 3];
                     for (a, &v) in vals.iter().enumerate() {
                         let x = row.fr + a;

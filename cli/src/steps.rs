@@ -478,12 +478,14 @@ pub fn lods(scene: &mut Scene, options: Option<&LodOptions>, file: &str) -> anyh
         meshes,
         skeleton,
         clips,
+        materials,
         ..
     } = scene;
     mesh_lods(
         meshes,
         skeleton.as_ref(),
         clips,
+        materials,
         options,
         &LodTuning::default(),
         file,
@@ -500,12 +502,14 @@ pub fn lod_tuning(effort: EffortArg) -> LodTuning {
     }
 }
 
-/// [`lods`] on a scene's meshes alone (`skeleton` is the scene's), so that its clips can be worked
-/// on at the same time. Returns each mesh's wall times (empty for `None`).
+/// [`lods`] on a scene's meshes alone (`skeleton`, `clips` and `materials` are the scene's), so
+/// that its clips can be worked on at the same time. Returns each mesh's wall times (empty for
+/// `None`).
 pub fn mesh_lods(
     meshes: &mut [sinew_scene::Mesh],
     skeleton: Option<&sinew_core::Skeleton>,
     clips: &[sinew_scene::SceneClip],
+    materials: &[sinew_scene::Material],
     options: Option<&LodOptions>,
     tuning: &LodTuning,
     file: &str,
@@ -521,9 +525,10 @@ pub fn mesh_lods(
             // The plain builds are also compared under poses of the scene's own clips, and the
             // clips' size sets how many meshes have them.
             let motion = sinew_pipeline::lod::scene_motion(clips, skeleton);
-            let (_, times) =
-                sinew_pipeline::lod::generate_mesh_lods_timed(meshes, skeleton, o, tuning, &motion)
-                    .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
+            let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
+                meshes, skeleton, materials, o, tuning, &motion,
+            )
+            .map_err(|e| anyhow!("{file}: LOD generation: {e}"))?;
             Ok(times)
         }
     }

@@ -245,6 +245,7 @@ fn convert_one(job: &Job, plan: &Plan, mut scene: Scene) -> anyhow::Result<Built
                 &mut scene.meshes,
                 scene.skeleton.as_ref(),
                 &scene.clips,
+                &scene.materials,
                 plan.lod.as_ref(),
                 &plan.lod_tuning,
                 &label,

@@ -10,7 +10,9 @@
 //!
 //! Each LOD is simplified from the previous one (meshoptimizer's recommendation for chains), the
 //! whole mesh in one call (`step`), with:
-//! - attribute-aware collapses: normals and UVs weigh in the collapse cost;
+//! - attribute-aware collapses: normals and UVs weigh in the collapse cost; UVs that no texture
+//!   reads (no range's material has one) neither weigh nor make seams: copies of a vertex that
+//!   differ only in UV are welded, as gltfpack drops unused texture coordinates;
 //! - skin awareness: each vertex also carries its displacement under two fixed test poses of the
 //!   skeleton (every joint turned 25 degrees about its local X, then about its local Z), weighted
 //!   above the normals. Two vertices whose influences differ move apart under those poses, so
@@ -32,7 +34,8 @@
 //!   builds of the same target from LOD 0 as it came in (gltfpack's `-si` way, on positions
 //!   alone, gltfpack's `-si -sa` way with its sloppy pass, and that sloppy pass on the part's
 //!   vertices alone asked for as many triangles as its grid gives within the target:
-//!   `Step::plains`), each kept instead when it has no more
+//!   `Step::plains`; for a mesh whose UVs no texture reads, these four from LOD 0 welded without
+//!   its UVs and four more with their seams held), each kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
 //!   under the test poses, and is no farther under poses sampled from the scene's clips
 //!   ([`reference_poses`]; ties keep the step's own build); then a posed repair build of the best
@@ -60,10 +63,13 @@ pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, Sce
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
-use sinew_scene::{GeneratedLod, Mesh, NotBuiltLod, NotBuiltReason, Scene};
+use sinew_scene::{GeneratedLod, Material, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Step};
 pub use step::{LodTuning, PLAIN_WORK_BOUND};
 use weld::{flat_soup, is_flat_soup, split_shared, weld};
+
+/// A step's source under the test poses and under the reference poses (positions per pose).
+type PosedSource = (Vec<Vec<Vec3>>, Vec<Vec<Vec3>>);
 
 /// A LOD's reported error is at least its measured distance to LOD 0 times this margin: the larger
 /// of the distance from LOD 0's vertices to the LOD's surface and from the LOD's vertices, centroids
@@ -281,7 +287,8 @@ pub fn build_lods(
     build_lods_tuned(mesh, skeleton, options, &LodTuning::default())
 }
 
-/// [`build_lods`] with explicit quality knobs.
+/// [`build_lods`] with explicit quality knobs. Without the scene's materials, the mesh's UVs are
+/// taken to be read by a texture (their seams hold); [`generate_lods`] knows.
 pub fn build_lods_tuned(
     mesh: &Mesh,
     skeleton: Option<&Skeleton>,
@@ -298,6 +305,7 @@ pub fn build_lods_tuned(
         mesh,
         plain[0].then_some(&mesh.geometry),
         skeleton,
+        true,
         options,
         tuning,
         &[],
@@ -308,16 +316,26 @@ pub fn build_lods_tuned(
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
 /// repair and measurement; a level not built counts when simplification was tried) onto
 /// `seconds`.
+#[allow(clippy::too_many_arguments)]
 fn build_lods_timed(
     mesh: &Mesh,
     plain_input: Option<&Lod>,
     skeleton: Option<&Skeleton>,
+    uvs_read: bool,
     options: &LodOptions,
     tuning: &LodTuning,
     reference: &[Vec<Transform>],
     seconds: &mut Vec<f64>,
 ) -> Result<LodChain, LodError> {
     options.validate()?;
+    // UVs that no texture reads are not seams: vertices that differ only in UV are welded (each
+    // keeps its first copy's UV) and UVs do not weigh in the collapse cost, as gltfpack drops
+    // the texture coordinates no material uses before it simplifies.
+    let untextured = LodTuning {
+        uv_weight: 0.0,
+        ..*tuning
+    };
+    let tuning = if uvs_read { tuning } else { &untextured };
     validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
         mesh: mesh.name.clone(),
         problem,
@@ -376,24 +394,29 @@ fn build_lods_timed(
     let plain_flat = plain_input.is_some_and(is_flat_soup);
     // meshoptimizer squares the limit: the largest finite value stays finite.
     let plain_budget = options.max_error.unwrap_or(f32::MAX.sqrt());
-    let plain_source = if let Some(input) = plain_input {
-        let flat = plain_flat;
-        let welded = match split_shared(input) {
-            Some(split) => weld(&split, flat),
-            None => weld(input, flat),
-        };
-        validate_lod(&welded).map_err(|problem| LodError::BadMesh {
-            mesh: mesh.name.clone(),
-            problem: format!("after welding: {problem}"),
-        })?;
-        Some(welded)
-    } else {
-        None
-    };
-    let plains: Vec<Step> = match &plain_source {
-        Some(source) => Step::plains(source, tuning),
-        None => Vec::new(),
-    };
+    // Without a texture reading the UVs, the plain builds are made from two sources: welded
+    // without UVs, as gltfpack (which drops texture coordinates no material uses) builds, and with
+    // them, their seams held: measured on the corpus, each is the closer on some meshes (docs/lod.md).
+    let mut plain_sources: Vec<Lod> = Vec::new();
+    if let Some(input) = plain_input {
+        let split = split_shared(input);
+        let input = split.as_ref().unwrap_or(input);
+        for ignore_uvs in [!uvs_read, false] {
+            let welded = weld(input, plain_flat, ignore_uvs);
+            validate_lod(&welded).map_err(|problem| LodError::BadMesh {
+                mesh: mesh.name.clone(),
+                problem: format!("after welding: {problem}"),
+            })?;
+            plain_sources.push(welded);
+            if !ignore_uvs {
+                break;
+            }
+        }
+    }
+    let plains: Vec<Step> = plain_sources
+        .iter()
+        .flat_map(|source| Step::plains(source, tuning))
+        .collect();
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
     // (skinned meshes) and its vertices, centroids and edge midpoints at rest; then LOD 0's
     // vertices under the reference poses. The plain builds' source under the same poses.
@@ -403,18 +426,27 @@ fn build_lods_timed(
             .map(|p| distinct(&used_vertices(p, &mesh.geometry.indices)))
             .collect()
     };
-    let (base_posed, base_reference, plain_posed, plain_reference) = match &plain_source {
-        Some(source) => (
+    let (base_posed, base_reference) = if plain_sources.is_empty() {
+        Default::default()
+    } else {
+        (
             step::test_poses(&mesh.geometry, skeleton),
             step::reference_positions(&mesh.geometry, skeleton, reference),
-            step::test_poses(source, skeleton),
-            step::reference_positions(source, skeleton, reference),
-        ),
-        None => Default::default(),
+        )
     };
+    // Each plain source under the test poses and under the reference poses.
+    let plain_posed: Vec<PosedSource> = plain_sources
+        .iter()
+        .map(|source| {
+            (
+                step::test_poses(source, skeleton),
+                step::reference_positions(source, skeleton, reference),
+            )
+        })
+        .collect();
     let (posed_points, reference_points) = (points_of(&base_posed), points_of(&base_reference));
     // LOD 0's vertices that triangles use, for the posed repair build.
-    let base_used: Vec<u32> = if plain_source.is_some() {
+    let base_used: Vec<u32> = if !plain_sources.is_empty() {
         let mut used = mesh.geometry.indices.clone();
         used.sort_unstable();
         used.dedup();
@@ -462,8 +494,8 @@ fn build_lods_timed(
         };
         let flat = is_flat_soup(&previous);
         let welded = match split_shared(&previous) {
-            Some(split) => weld(&split, flat),
-            None => weld(&previous, flat),
+            Some(split) => weld(&split, flat, !uvs_read),
+            None => weld(&previous, flat, !uvs_read),
         };
         validate_lod(&welded).map_err(|problem| LodError::BadMesh {
             mesh: mesh.name.clone(),
@@ -515,11 +547,14 @@ fn build_lods_timed(
         // indices refer to.
         // A step's source under the test poses and under the reference poses: the step's own,
         // then the plain builds'.
-        let sources_posed = [
-            (&step_posed, &step_reference),
-            (&plain_posed, &plain_reference),
-        ];
-        let posed_of = |from: &Step| sources_posed[usize::from(from.is_plain())];
+        let posed_of = |from: &Step| -> (&Vec<Vec<Vec3>>, &Vec<Vec<Vec3>>) {
+            plain_sources
+                .iter()
+                .position(|s| from.is_plain() && std::ptr::eq(s, from.source()))
+                .map_or((&step_posed, &step_reference), |i| {
+                    (&plain_posed[i].0, &plain_posed[i].1)
+                })
+        };
         let score = |from: &Step, indices: &[u32], m: &Measured, limit: f32| -> Option<f32> {
             let mut worst = 0.0f32;
             let mut hints = Vec::new();
@@ -804,9 +839,19 @@ pub fn generate_lods_tuned(
 ) -> Result<Vec<MeshLodReport>, LodError> {
     let motion = scene_motion(&scene.clips, scene.skeleton.as_ref());
     let Scene {
-        meshes, skeleton, ..
+        meshes,
+        skeleton,
+        materials,
+        ..
     } = scene;
-    generate_mesh_lods(meshes, skeleton.as_ref(), options, tuning, &motion)
+    generate_mesh_lods(
+        meshes,
+        skeleton.as_ref(),
+        materials,
+        options,
+        tuning,
+        &motion,
+    )
 }
 
 /// [`generate_lods_tuned`] on a scene's meshes alone, so that a caller can work on the scene's clips
@@ -817,11 +862,29 @@ pub fn generate_lods_tuned(
 pub fn generate_mesh_lods(
     meshes: &mut [Mesh],
     skeleton: Option<&Skeleton>,
+    materials: &[Material],
     options: &LodOptions,
     tuning: &LodTuning,
     motion: &SceneMotion,
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    generate_mesh_lods_timed(meshes, skeleton, options, tuning, motion).map(|(r, _)| r)
+    generate_mesh_lods_timed(meshes, skeleton, materials, options, tuning, motion).map(|(r, _)| r)
+}
+
+/// Whether a texture may read `mesh`'s UVs: one of its material ranges has a material (of
+/// `materials`, by name) with a texture, or a material not found there, or the mesh has UVs and no
+/// ranges. Otherwise UV seams do not hold its simplification ([`build_lods_timed`]).
+fn uvs_read(mesh: &Mesh, materials: &[Material]) -> bool {
+    let g = &mesh.geometry;
+    if g.uvs.is_empty() {
+        return false;
+    }
+    g.submeshes.is_empty()
+        || g.submeshes.iter().any(|s| {
+            materials
+                .iter()
+                .find(|m| m.name == s.material)
+                .is_none_or(|m| m.texture.is_some())
+        })
 }
 
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
@@ -839,6 +902,7 @@ pub struct MeshLodTimes {
 pub fn generate_mesh_lods_timed(
     meshes: &mut [Mesh],
     skeleton: Option<&Skeleton>,
+    materials: &[Material],
     options: &LodOptions,
     tuning: &LodTuning,
     motion: &SceneMotion,
@@ -860,6 +924,7 @@ pub fn generate_mesh_lods_timed(
                 mesh,
                 plain_input.as_ref(),
                 skeleton,
+                uvs_read(mesh, materials),
                 options,
                 tuning,
                 reference,

@@ -280,3 +280,68 @@ fn sloppy_builds_get_as_near_their_target_as_the_grid_allows() {
         assert!(out.iter().all(|&v| (v as usize) < source.positions.len()));
     }
 }
+
+/// A UV seam that no texture reads is welded away: two copies of a vertex that differ only in UV
+/// become one (the first copy's UV kept) when UVs are ignored, and stay two otherwise; copies that
+/// differ in their normal stay apart either way.
+#[test]
+fn a_weld_without_uvs_merges_copies_that_differ_only_in_uv() {
+    let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    // A quad of two triangles; its corner (1, 1) comes twice with other UVs, its corner (0, 1)
+    // twice with other normals.
+    let lod = Lod {
+        positions: vec![
+            p(0.0, 0.0),
+            p(1.0, 0.0),
+            p(1.0, 1.0),
+            p(1.0, 1.0),
+            p(0.0, 1.0),
+            p(0.0, 1.0),
+        ],
+        normals: vec![Vec3::Z, Vec3::Z, Vec3::Z, Vec3::Z, Vec3::Z, Vec3::X],
+        uvs: vec![
+            Vec2::ZERO,
+            Vec2::X,
+            Vec2::ONE,
+            Vec2::new(0.5, 0.5),
+            Vec2::Y,
+            Vec2::Y,
+        ],
+        indices: vec![0, 1, 2, 0, 3, 5, 0, 4, 3],
+        ..Lod::default()
+    };
+    let held = weld::weld(&lod, false, false);
+    assert_eq!(held.positions.len(), 6);
+    let opened = weld::weld(&lod, false, true);
+    assert_eq!(opened.positions.len(), 5);
+    assert_eq!(opened.indices, vec![0, 1, 2, 0, 2, 3, 0, 4, 2]);
+    assert_eq!(opened.uvs[2], Vec2::ONE);
+    assert_eq!(opened.normals[3], Vec3::X);
+}
+
+/// A mesh's UVs are read when one of its ranges' materials has a texture, or names a material the
+/// scene does not have, or it has UVs and no ranges; not when every range's material has none.
+#[test]
+fn uvs_are_read_where_a_texture_may_read_them() {
+    let mut mesh = static_mesh(2);
+    let range = |material: &str| Submesh {
+        first_index: 0,
+        index_count: 6,
+        material: material.into(),
+    };
+    let material = |name: &str, texture: Option<&str>| Material {
+        name: name.into(),
+        base_color: [1.0; 4],
+        texture: texture.map(Into::into),
+    };
+    let materials = [material("plain", None), material("skin", Some("skin.png"))];
+    assert!(!uvs_read(&mesh, &materials), "no UVs");
+    mesh.geometry.uvs = vec![Vec2::ZERO; mesh.geometry.positions.len()];
+    assert!(uvs_read(&mesh, &materials), "UVs and no ranges");
+    mesh.geometry.submeshes = vec![range("plain")];
+    assert!(!uvs_read(&mesh, &materials));
+    mesh.geometry.submeshes = vec![range("plain"), range("skin")];
+    assert!(uvs_read(&mesh, &materials));
+    mesh.geometry.submeshes = vec![range("plain"), range("unknown")];
+    assert!(uvs_read(&mesh, &materials));
+}

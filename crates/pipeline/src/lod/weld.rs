@@ -90,12 +90,14 @@ pub(super) fn split_shared(lod: &Lod) -> Option<Lod> {
     out
 }
 
-/// Merges vertices that are bit-for-bit equal in position, UV, joints and weights (and normal, unless
-/// `ignore_normals`) and used by the same submesh, with meshoptimizer's `generateVertexRemap`, and
-/// drops triangles with two corners at one position. Lossless when normals count; with
-/// `ignore_normals` the merged vertices get area-weighted normals of the welded surface (used only as
-/// a simplification attribute; [`flat_soup`] rebuilds face normals afterwards). `lod` must be valid.
-pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
+/// Merges vertices that are bit-for-bit equal in position, joints and weights (and normal, unless
+/// `ignore_normals`; and UV, unless `ignore_uvs`) and used by the same submesh, with
+/// meshoptimizer's `generateVertexRemap`, and drops triangles with two corners at one position.
+/// Lossless when normals and UVs count; with `ignore_normals` the merged vertices get
+/// area-weighted normals of the welded surface (used only as a simplification attribute;
+/// [`flat_soup`] rebuilds face normals afterwards); with `ignore_uvs` (no texture reads them) a
+/// merged vertex keeps its first copy's UV. `lod` must be valid.
+pub(super) fn weld(lod: &Lod, ignore_normals: bool, ignore_uvs: bool) -> Lod {
     const KEY: usize = 15;
     let n = lod.positions.len();
     let of = submesh_of(lod);
@@ -107,7 +109,7 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool) -> Lod {
             let q = lod.normals[v];
             k[3..6].copy_from_slice(&[q.x.to_bits(), q.y.to_bits(), q.z.to_bits()]);
         }
-        if let Some(uv) = lod.uvs.get(v) {
+        if let Some(uv) = lod.uvs.get(v).filter(|_| !ignore_uvs) {
             k[6..8].copy_from_slice(&[uv.x.to_bits(), uv.y.to_bits()]);
         }
         if let (Some(j), Some(w)) = (lod.joints.get(v), lod.weights.get(v)) {

@@ -150,6 +150,10 @@ pub struct LodArgs {
     /// Influences per vertex kept in the lowest LOD (1 to 4).
     #[arg(long, value_name = "N", default_value_t = 4)]
     pub lod_influences: usize,
+    /// Hold UV seams even on meshes whose materials have no texture (by default their UV seams do
+    /// not hold: nothing draws them), for meshes to be textured later.
+    #[arg(long)]
+    pub lod_keep_uv_seams: bool,
 }
 
 /// Partial-body options shared by `convert` and `split`.

@@ -467,6 +467,7 @@ pub fn lod_options(args: &LodArgs) -> anyhow::Result<Option<LodOptions>> {
         ratios,
         max_error: args.lod_max_error,
         lowest_lod_influences: args.lod_influences,
+        keep_uv_seams: args.lod_keep_uv_seams,
     };
     opts.validate().map_err(|e| anyhow!("--lod: {e}"))?;
     Ok(Some(opts))
@@ -572,6 +573,7 @@ pub fn lod_spec_options(
             lod: spec.to_string(),
             lod_max_error: None,
             lod_influences: 4,
+            lod_keep_uv_seams: false,
         })
     })
     .transpose()

@@ -693,6 +693,44 @@ fn lod_regenerates_lods_of_a_sinew_file() {
     assert_eq!(got["summary"]["clips"], 2);
 }
 
+/// `--lod-keep-uv-seams`: the biped fixture has UVs (with seams) and no texture, so by default its
+/// LODs weld the copies of a vertex that differ only in UV (docs/lod.md, "UVs no texture reads");
+/// with the flag the seams hold and each LOD keeps more vertices for the same triangle budget.
+#[test]
+fn lod_keep_uv_seams_holds_the_seams_of_an_untextured_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let fixture = sinew_testdata::fixtures().join("biped.gltf");
+    let lods = |flag: Option<&str>| {
+        let out = dir.path().join(format!("b{}.sinew", flag.is_some()));
+        let mut args: Vec<&std::ffi::OsStr> =
+            vec![fixture.as_os_str(), "-o".as_ref(), out.as_os_str()];
+        args.extend(flag.map(std::ffi::OsStr::new));
+        let (code, report, stderr) = convert_json(&args);
+        assert_eq!(code, 0, "{stderr}");
+        let mesh = &report["files"][0]["meshes"][0];
+        arr(&mesh["lods"])
+            .iter()
+            .map(|l| {
+                (
+                    l["triangles"].as_i64().unwrap(),
+                    l["vertices"].as_i64().unwrap(),
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    let (opened, held) = (lods(None), lods(Some("--lod-keep-uv-seams")));
+    assert_eq!(opened.len(), 2);
+    for (o, h) in opened.iter().zip(&held) {
+        assert_eq!(o.0, h.0, "triangles");
+        assert!(
+            o.1 < h.1,
+            "vertices without the flag {} vs with it {}",
+            o.1,
+            h.1
+        );
+    }
+}
+
 /// Bad input: exit 2, one line naming the file, no output written.
 #[test]
 fn bad_inputs_exit_2_with_one_line_and_no_output() {

@@ -599,6 +599,16 @@ fn uv_seams_hold_only_where_a_texture_reads_them() {
         opened_rest < held_rest,
         "untextured {opened_rest:.3}% at {opened_tris} vs textured {held_rest:.3}% at {held_tris}"
     );
+    // `--lod-keep-uv-seams`: the untextured mesh's seams hold as the textured one's.
+    let mut kept = untextured.clone();
+    let options = LodOptions {
+        ratios: vec![458.0 / kept.meshes[0].geometry.triangle_count() as f32],
+        keep_uv_seams: true,
+        ..Default::default()
+    };
+    generate_lods_tuned(&mut kept, &options, &LodTuning::default()).unwrap();
+    assert_eq!(joined(&kept), 0);
+    assert_eq!(kept.meshes[0].lods[0].lod, held.meshes[0].lods[0].lod);
 }
 
 #[test]

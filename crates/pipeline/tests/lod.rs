@@ -161,6 +161,7 @@ fn error_limit_stops_early_and_says_so() {
             ratios: vec![0.05, 0.01],
             max_error: Some(1e-5),
             lowest_lod_influences: 4,
+            keep_uv_seams: false,
         },
     )
     .unwrap();
@@ -254,6 +255,7 @@ fn lowest_lod_influences_are_cut_and_renormalised() {
             ratios: vec![0.5, 0.25],
             max_error: None,
             lowest_lod_influences: 2,
+            keep_uv_seams: false,
         },
     )
     .unwrap()

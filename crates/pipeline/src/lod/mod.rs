@@ -88,6 +88,10 @@ pub struct LodOptions {
     pub max_error: Option<f32>,
     /// Influences per vertex kept in the lowest LOD (1 to 4).
     pub lowest_lod_influences: usize,
+    /// UV seams hold even where no texture reads the UVs (a mesh to be textured later). By default
+    /// they hold only on a mesh with a textured material range (docs/lod.md, "UVs no texture
+    /// reads"), as gltfpack drops unused texture coordinates unless told to keep them (`-kv`).
+    pub keep_uv_seams: bool,
 }
 
 impl Default for LodOptions {
@@ -96,6 +100,7 @@ impl Default for LodOptions {
             ratios: vec![0.5, 0.25],
             max_error: None,
             lowest_lod_influences: MAX_INFLUENCES,
+            keep_uv_seams: false,
         }
     }
 }
@@ -924,7 +929,7 @@ pub fn generate_mesh_lods_timed(
                 mesh,
                 plain_input.as_ref(),
                 skeleton,
-                uvs_read(mesh, materials),
+                options.keep_uv_seams || uvs_read(mesh, materials),
                 options,
                 tuning,
                 reference,

@@ -406,16 +406,14 @@ fn build_lods_timed(
     if let Some(input) = plain_input {
         let split = split_shared(input);
         let input = split.as_ref().unwrap_or(input);
-        for ignore_uvs in [!uvs_read, false] {
+        let uvs_ignored: &[bool] = if uvs_read { &[false] } else { &[true, false] };
+        for &ignore_uvs in uvs_ignored {
             let welded = weld(input, plain_flat, ignore_uvs);
             validate_lod(&welded).map_err(|problem| LodError::BadMesh {
                 mesh: mesh.name.clone(),
                 problem: format!("after welding: {problem}"),
             })?;
             plain_sources.push(welded);
-            if !ignore_uvs {
-                break;
-            }
         }
     }
     let plains: Vec<Step> = plain_sources

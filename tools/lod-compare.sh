@@ -10,7 +10,8 @@
 #
 # usage: GLTFPACK=/path/to/gltfpack [PLAIN=1] tools/lod-compare.sh OUT.jsonl [FILE ...]
 #   (PLAIN=1: sinew's chains with the plain builds of `convert --effort max`; PLAIN_WORK=N: with
-#   them on the meshes whose plain work is at most N instead of the default bound)
+#   them on the meshes whose plain work is at most N instead of the default bound; POSE_AT="F ...":
+#   the clip times measured posed instead of 0.125 0.25 0.5 0.75 of the first clip, C.F for clip C)
 #   (default files: the corpus meshes and fixtures of docs/lod.md; GLTFPACK defaults to the
 #   peers' build, /work/peers/gltfpack-build/gltfpack)
 set -euo pipefail
@@ -48,6 +49,8 @@ done
 plain=()
 if [ -n "${PLAIN:-}" ]; then plain=(--plain); fi
 if [ -n "${PLAIN_WORK:-}" ]; then plain+=(--plain-work "$PLAIN_WORK"); fi
+poses=()
+for at in ${POSE_AT:-0.125 0.25 0.5 0.75}; do poses+=(--pose-at "$at"); done
 "$root/target/release/examples/lod_peers" --gltfpack "$gltfpack" "${plain[@]}" \
-  --pose-at 0.125 --pose-at 0.25 --pose-at 0.5 --pose-at 0.75 "${inputs[@]}" > "$out"
+  "${poses[@]}" "${inputs[@]}" > "$out"
 echo "wrote $out ($(wc -l < "$out") rows)"

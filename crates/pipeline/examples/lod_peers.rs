@@ -20,7 +20,8 @@
 //! Distances: the symmetric sampled Hausdorff distance of `sinew_testdata::geometry` (vertices,
 //! centroids, edge midpoints of each mesh against the other's surface), in % of the mesh's LOD 0
 //! bind-pose bounding-box diagonal; `posed` with both skinned by the reference's first clip at each
-//! `--pose-at` fraction of its duration (default 0.5), with the reference's palette when
+//! `--pose-at` fraction of its duration (default 0.5; `C.F`, C of 1 or more: clip C, counted from 0,
+//! at fraction F, a pose of a clip the file lacks left out), with the reference's palette when
 //! gltfpack's output has the same joints and inverse bind matrices, else with its own first clip at
 //! the same time.
 #![allow(clippy::unwrap_used, clippy::expect_used)]

@@ -58,15 +58,15 @@ pub fn soup(
     (p, i)
 }
 
-/// The skinning palette of the scene's first clip sampled at `at` times its duration, with the
-/// clip's name and that time.
+/// The skinning palette of the scene's first clip sampled at `at` times its duration (`at` of 1
+/// or more: clip `at.floor()` at `at.fract()` of its duration), with the clip's name and that time.
 pub fn pose_palette(scene: &Scene, at: f32) -> Option<(Vec<Mat4>, String, f32)> {
     let skeleton = scene.skeleton.as_ref()?;
-    let c = scene.clips.first()?;
+    let c = scene.clips.get(at.floor() as usize)?;
     let clip = c.to_clip().ok()?;
     let binding = ClipBinding::new(&clip, skeleton);
     let mut locals = skeleton.bind_local().to_vec();
-    let t = clip.duration() * at;
+    let t = clip.duration() * at.fract();
     Sampler::new()
         .sample(&clip, &binding, skeleton, t, &mut locals)
         .ok()?;

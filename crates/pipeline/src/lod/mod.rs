@@ -30,12 +30,14 @@
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
 //! - on a mesh whose plain builds cost little ([`plain_work`] within
 //!   `LodTuning::plain_work_bound`, or within the share of a file's clips: [`SceneMotion`]), and
-//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), four plain
+//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), five plain
 //!   builds of the same target from LOD 0 as it came in (gltfpack's `-si` way, on positions
-//!   alone, gltfpack's `-si -sa` way with its sloppy pass, and that sloppy pass on the part's
-//!   vertices alone asked for as many triangles as its grid gives within the target:
-//!   `Step::plains`; for a mesh whose UVs no texture reads, these four from LOD 0 welded without
-//!   its UVs and four more with their seams held), each kept instead when it has no more
+//!   alone, gltfpack's `-si -sa` way with its sloppy pass, that sloppy pass on the part's
+//!   vertices alone asked for as many triangles as its grid gives within the target, and
+//!   gltfpack's `-si` on each material range alone as on a glTF export's primitives, its limit
+//!   scaled by the scene's largest mesh: `Step::plains`; for a mesh whose UVs no texture reads,
+//!   these five from LOD 0 welded without its UVs and five more with their seams held), each
+//!   kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
 //!   under the test poses, and is no farther under poses sampled from the scene's clips
 //!   ([`reference_poses`]; ties keep the step's own build); then a posed repair build of the best
@@ -310,7 +312,7 @@ pub fn build_lods_tuned(
         mesh,
         plain[0].then_some(&mesh.geometry),
         skeleton,
-        true,
+        (true, mesh_scale(mesh)),
         options,
         tuning,
         &[],
@@ -326,7 +328,7 @@ fn build_lods_timed(
     mesh: &Mesh,
     plain_input: Option<&Lod>,
     skeleton: Option<&Skeleton>,
-    uvs_read: bool,
+    (uvs_read, scene_scale): (bool, f32),
     options: &LodOptions,
     tuning: &LodTuning,
     reference: &[Vec<Transform>],
@@ -359,17 +361,7 @@ fn build_lods_timed(
             });
         }
     }
-    let positions: Vec<[f32; 3]> = mesh
-        .geometry
-        .positions
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
-    let scale = if positions.is_empty() {
-        0.0
-    } else {
-        meshopt::simplify_scale_decoder(&positions)
-    };
+    let scale = mesh_scale(mesh);
     let base_tris = mesh.geometry.triangle_count();
     // Part extremes are found once, on LOD 0, and kept through the chain: a part simplified to a
     // few triangles in one step must keep its reach in the next.
@@ -418,7 +410,7 @@ fn build_lods_timed(
     }
     let plains: Vec<Step> = plain_sources
         .iter()
-        .flat_map(|source| Step::plains(source, tuning))
+        .flat_map(|source| Step::plains(source, tuning, scene_scale))
         .collect();
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
     // (skinned meshes) and its vertices, centroids and edge midpoints at rest; then LOD 0's
@@ -890,6 +882,22 @@ fn uvs_read(mesh: &Mesh, materials: &[Material]) -> bool {
         })
 }
 
+/// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): gltfpack's
+/// `-si` limit on each mesh is 1% of the largest mesh's (`Plain::Primitives`).
+fn mesh_scale(mesh: &Mesh) -> f32 {
+    let positions: Vec<[f32; 3]> = mesh
+        .geometry
+        .positions
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    if positions.is_empty() {
+        0.0
+    } else {
+        meshopt::simplify_scale_decoder(&positions)
+    }
+}
+
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct MeshLodTimes {
@@ -913,6 +921,7 @@ pub fn generate_mesh_lods_timed(
     options.validate()?;
     let reference = &motion.poses;
     let plains = plain_builds_of(meshes, skeleton, tuning, motion);
+    let scene_scale = meshes.iter().map(mesh_scale).fold(0.0f32, f32::max);
     let one =
         |(mesh, plain): (&mut Mesh, bool)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
             let started = std::time::Instant::now();
@@ -927,7 +936,10 @@ pub fn generate_mesh_lods_timed(
                 mesh,
                 plain_input.as_ref(),
                 skeleton,
-                options.keep_uv_seams || uvs_read(mesh, materials),
+                (
+                    options.keep_uv_seams || uvs_read(mesh, materials),
+                    scene_scale,
+                ),
                 options,
                 tuning,
                 reference,

@@ -15,6 +15,8 @@ use sinew_core::glam;
 use sinew_core::skinning;
 use sinew_core::{Lod, Skeleton, Submesh, Transform};
 
+mod primitives;
+
 /// The simplifier's quality knobs. The defaults are the measured best (docs/lod.md); the other values
 /// exist so that `examples/lod_compare.rs --sweep` can show why.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -116,6 +118,13 @@ pub(super) enum Plain {
     /// over their box), its clustering grid asked for more where it fell short of the target
     /// ([`Step::sloppy_within`]): more triangles, not always closer, so a build of its own.
     SloppyNear,
+    /// gltfpack's `-si` as it meets a glTF export: each material range is a primitive of its own,
+    /// simplified alone on its own vertices, within 1% of its extent scaled by the largest mesh's
+    /// extent over its mesh's (gltfpack's default `-ss`), and it stops at that limit (no going on
+    /// to the target: on the way there meshoptimizer's `Prune`, unlimited, removes whole parts).
+    /// More triangles than the target where the limit stops it, so kept only where the other
+    /// builds stop above the target too ([`Step::run_primitives`]).
+    Primitives,
 }
 
 /// A plain build's attributes (values, per-vertex count), weights and options ([`Step::plain`]):
@@ -436,6 +445,8 @@ pub(super) struct Step<'a> {
     count: usize,
     /// Where a plain build's first passes are kept for the other plain builds of its settings.
     first_passes: Option<std::sync::Arc<FirstPasses>>,
+    /// [`Plain::Primitives`]: the extent of the scene's largest mesh, which gltfpack's 1% is of.
+    scene_scale: f32,
 }
 
 impl<'a> Step<'a> {
@@ -490,6 +501,7 @@ impl<'a> Step<'a> {
             plain,
             count,
             first_passes: None,
+            scene_scale: 0.0,
         }
     }
 
@@ -504,20 +516,24 @@ impl<'a> Step<'a> {
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
     }
 
-    /// The four plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`],
-    /// [`Plain::Sloppy`] and [`Plain::SloppyNear`], in that order), sharing what they compute
+    /// The five plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`],
+    /// [`Plain::Sloppy`], [`Plain::SloppyNear`] and [`Plain::Primitives`], in that order), sharing what they compute
     /// alike: the vertex positions, material ranges and position ids, and the first pass of the
     /// normals and sloppy builds ([`FirstPasses`]).
-    pub(super) fn plains(source: &'a Lod, tuning: &LodTuning) -> Vec<Self> {
+    /// `scene_scale`: the extent (meshoptimizer's) of the scene's largest mesh, for
+    /// [`Plain::Primitives`].
+    pub(super) fn plains(source: &'a Lod, tuning: &LodTuning, scene_scale: f32) -> Vec<Self> {
         let mut normals = Step::plain(source, tuning, Plain::Normals);
         let first_passes = std::sync::Arc::new(FirstPasses::default());
         let positions = normals.plain_like(Plain::Positions);
         let mut sloppy = normals.plain_like(Plain::Sloppy);
         let mut near = normals.plain_like(Plain::SloppyNear);
+        let mut primitives = normals.plain_like(Plain::Primitives);
+        primitives.scene_scale = scene_scale;
         normals.first_passes = Some(std::sync::Arc::clone(&first_passes));
         sloppy.first_passes = Some(std::sync::Arc::clone(&first_passes));
         near.first_passes = Some(first_passes);
-        vec![normals, positions, sloppy, near]
+        vec![normals, positions, sloppy, near, primitives]
     }
 
     /// A plain build of this step's source of another kind, with this step's positions, material
@@ -536,6 +552,7 @@ impl<'a> Step<'a> {
             plain: Some(kind),
             count,
             first_passes: None,
+            scene_scale: 0.0,
         }
     }
 
@@ -758,6 +775,9 @@ impl<'a> Step<'a> {
     /// extent), `keep`'s vertices locked or given priority.
     pub(super) fn run(&self, target_triangles: usize, max_error: f32, keep: &Anchors) -> Candidate {
         let source = self.source;
+        if self.plain == Some(Plain::Primitives) {
+            return self.run_primitives(target_triangles, max_error, keep);
+        }
         if self.whole {
             let target = target_triangles.min(source.triangle_count());
             let (simplified, error) =
@@ -773,6 +793,23 @@ impl<'a> Step<'a> {
             // one across seams it keeps; this is the guard): each range alone, as below.
         }
         let locks = self.flags(true, keep);
+        // Each range gets its share of the target, rounded; never below one triangle if it had any.
+        self.by_range(target_triangles, f64::round, |part, target| {
+            self.simplify(part, &locks, target, max_error)
+        })
+    }
+
+    /// Each material range of the source (the whole index list when there are none) simplified
+    /// by `each` towards its share of `target_triangles` (`share` rounds it; at least one triangle
+    /// if the range had any), the ranges in order: a range at or under its share stays as it is.
+    /// The candidate's error is the largest `each` returned.
+    pub(super) fn by_range(
+        &self,
+        target_triangles: usize,
+        share: fn(f64) -> f64,
+        mut each: impl FnMut(&[u32], usize) -> (Vec<u32>, f32),
+    ) -> Candidate {
+        let source = self.source;
         let total = source.triangle_count().max(1);
         let mut worst = 0.0f32;
         let mut indices = Vec::with_capacity(source.indices.len());
@@ -781,14 +818,13 @@ impl<'a> Step<'a> {
             let part = &source.indices
                 [sub.first_index as usize..(sub.first_index + sub.index_count) as usize];
             let part_tris = part.len() / 3;
-            // Each range gets its share of the target, rounded; never below one triangle if it had any.
-            let target = ((part_tris as f64 * target_triangles as f64 / total as f64).round()
+            let target = (share(part_tris as f64 * target_triangles as f64 / total as f64)
                 as usize)
                 .clamp(part_tris.min(1), part_tris);
             let simplified = if part.is_empty() || target >= part_tris {
                 part.to_vec()
             } else {
-                let (out, err) = self.simplify(part, &locks, target, max_error);
+                let (out, err) = each(part, target);
                 worst = worst.max(err);
                 out
             };

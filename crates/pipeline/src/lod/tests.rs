@@ -250,7 +250,7 @@ fn sphere(rings: u32, segments: u32) -> Lod {
 fn sloppy_builds_get_as_near_their_target_as_the_grid_allows() {
     let source = sphere(24, 48);
     let part = source.indices.clone();
-    let plains = step::Step::plains(&source, &LodTuning::default());
+    let plains = step::Step::plains(&source, &LodTuning::default(), 0.0);
     let near = &plains[3];
     let locks = vec![SimplifyVertex::empty(); source.positions.len()];
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
@@ -344,4 +344,117 @@ fn uvs_are_read_where_a_texture_may_read_them() {
     assert!(uvs_read(&mesh, &materials));
     mesh.geometry.submeshes = vec![range("plain"), range("unknown")];
     assert!(uvs_read(&mesh, &materials));
+}
+
+/// The plain build per material range (`Plain::Primitives`, gltfpack's `-si` on a glTF export's
+/// primitives): no triangle leaves its range, each range is meshoptimizer's result on that range's
+/// vertices alone, and its limit grows with the scene's largest mesh (gltfpack's default `-ss`):
+/// 1% of the range's extent when this mesh is the largest, ten times that when the largest is ten
+/// times this one.
+#[test]
+fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit() {
+    let mut source = sphere(12, 24);
+    let half = (source.indices.len() / 6 * 3) as u32;
+    source.submeshes = vec![
+        Submesh {
+            first_index: 0,
+            index_count: half,
+            material: "a".into(),
+        },
+        Submesh {
+            first_index: half,
+            index_count: source.indices.len() as u32 - half,
+            material: "b".into(),
+        },
+    ];
+    let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
+    let whole = meshopt::simplify_scale_decoder(&positions);
+    let target = source.triangle_count() / 4;
+    let build = |scene_scale: f32| {
+        let plains = step::Step::plains(&source, &LodTuning::default(), scene_scale);
+        plains[4].run(target, f32::MAX.sqrt(), &Anchors::default())
+    };
+    let alone = build(whole);
+    let scaled = build(10.0 * whole);
+    for c in [&alone, &scaled] {
+        assert_eq!(c.submeshes.len(), 2);
+        for (sub, range) in c.submeshes.iter().zip(&source.submeshes) {
+            let ours =
+                &c.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize];
+            let theirs: std::collections::HashSet<u32> = source.indices
+                [range.first_index as usize..(range.first_index + range.index_count) as usize]
+                .iter()
+                .copied()
+                .collect();
+            assert!(ours.iter().all(|v| theirs.contains(v)), "{}", sub.material);
+        }
+    }
+    // Each range as meshoptimizer gives it alone: its vertices in first-use order, normals at
+    // gltfpack's weight, `Prune`, the limit relative to the range's own extent; then, above the
+    // range's share, on to it without `Prune` (no limit given). The first pass's triangles and the
+    // result's.
+    let direct = |range: &Submesh, limit: f32| -> (usize, Vec<u32>) {
+        let part = &source.indices
+            [range.first_index as usize..(range.first_index + range.index_count) as usize];
+        let mut used: Vec<u32> = Vec::new();
+        let local: Vec<u32> = part
+            .iter()
+            .map(|&v| match used.iter().position(|&u| u == v) {
+                Some(i) => i as u32,
+                None => {
+                    used.push(v);
+                    used.len() as u32 - 1
+                }
+            })
+            .collect();
+        let p: Vec<[f32; 3]> = used.iter().map(|&v| positions[v as usize]).collect();
+        let n: Vec<f32> = used
+            .iter()
+            .flat_map(|&v| source.normals[v as usize].to_array())
+            .collect();
+        let locks = vec![SimplifyVertex::None; p.len()];
+        let share = part.len() / 3 * target / source.triangle_count();
+        let pass = |from: &[u32], limit: f32, flags| {
+            meshopt::simplify_with_attributes_and_locks_decoder(
+                from,
+                &p,
+                &n,
+                &[0.5; 3],
+                12,
+                &locks,
+                share * 3,
+                limit,
+                flags,
+                None,
+            )
+        };
+        let first = pass(&local, limit, meshopt::SimplifyOptions::Prune);
+        let out = if first.len() > share * 3 {
+            pass(&first, f32::MAX.sqrt(), meshopt::SimplifyOptions::empty())
+        } else {
+            first.clone()
+        };
+        (
+            first.len() / 3,
+            out.iter().map(|&v| used[v as usize]).collect(),
+        )
+    };
+    for (k, range) in source.submeshes.iter().enumerate() {
+        let got = |c: &step::Candidate| {
+            let sub = &c.submeshes[k];
+            c.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize]
+                .to_vec()
+        };
+        let (first_alone, at_one) = direct(range, 0.01);
+        let (first_scaled, at_ten) = direct(range, 0.1);
+        assert_eq!(got(&alone), at_one, "range {k} at 1%");
+        assert_eq!(got(&scaled), at_ten, "range {k} at 10%");
+        // The bumps hold a range at 1% above its share; ten times the limit goes further first
+        // (so the two builds differ in how they get to the share).
+        assert!(
+            first_scaled < first_alone,
+            "range {k}: {first_scaled} vs {first_alone}"
+        );
+    }
+    assert_ne!(alone.indices, scaled.indices);
 }

@@ -1,0 +1,117 @@
+//! The plain build per material range ([`Plain::Primitives`](super::Plain::Primitives)):
+//! gltfpack's `-si` as it meets a glTF export, each range a primitive of its own.
+
+use super::{Anchors, Candidate, Step, PLAIN_ERROR};
+use meshopt::{SimplifyOptions, SimplifyVertex};
+
+impl Step<'_> {
+    /// [`super::Plain::Primitives`]: each material range alone on its own vertices (locks: the
+    /// posed repair build's only), towards its share of the target within gltfpack's limit, 1% of the
+    /// range's extent times the scene's largest mesh's extent over this mesh's (or `max_error`, of
+    /// the mesh's, if smaller). The error returned is of the mesh's extent, as the other builds'
+    /// are.
+    pub(super) fn run_primitives(
+        &self,
+        target_triangles: usize,
+        max_error: f32,
+        keep: &Anchors,
+    ) -> Candidate {
+        let locks = self.flags(false, keep);
+        let whole = meshopt::simplify_scale_decoder(&self.positions);
+        let mut local_of = vec![u32::MAX; self.positions.len()];
+        // Per-vertex attributes as `plain_settings` gave them (none when the source has no normals).
+        let count = if self.attrs.len() == self.positions.len() * self.count {
+            self.count
+        } else {
+            0
+        };
+        // Each range's share rounded down, as gltfpack rounds each primitive's share of its ratio.
+        self.by_range(target_triangles, f64::floor, |part, target| {
+            // The range's vertices in first-use order, as gltfpack reindexes a primitive.
+            let mut used: Vec<u32> = Vec::new();
+            let local: Vec<u32> = part
+                .iter()
+                .map(|&v| {
+                    if local_of[v as usize] == u32::MAX {
+                        local_of[v as usize] = used.len() as u32;
+                        used.push(v);
+                    }
+                    local_of[v as usize]
+                })
+                .collect();
+            for &v in &used {
+                local_of[v as usize] = u32::MAX;
+            }
+            let positions: Vec<[f32; 3]> =
+                used.iter().map(|&v| self.positions[v as usize]).collect();
+            let attrs: Vec<f32> = used
+                .iter()
+                .flat_map(|&v| {
+                    let at = v as usize * count;
+                    self.attrs[at..at + count].iter().copied()
+                })
+                .collect();
+            let local_locks: Vec<SimplifyVertex> =
+                used.iter().map(|&v| locks[v as usize]).collect();
+            let own = meshopt::simplify_scale_decoder(&positions);
+            let to_mesh = if whole > 0.0 { own / whole } else { 1.0 };
+            // gltfpack scales each mesh's limit by the largest mesh's extent over its own
+            // (`-sse` turns it off; on by default): 1% of the largest mesh, in model units.
+            let scaled = if whole > 0.0 && self.scene_scale > whole {
+                PLAIN_ERROR * self.scene_scale / whole
+            } else {
+                PLAIN_ERROR
+            };
+            let limit = if to_mesh > 0.0 {
+                scaled.min(max_error / to_mesh)
+            } else {
+                scaled
+            };
+            let simplify = |from: &[u32], limit: f32, flags: SimplifyOptions| {
+                let mut err = 0.0f32;
+                let out = if count == 0 {
+                    meshopt::simplify_with_locks_decoder(
+                        from,
+                        &positions,
+                        &local_locks,
+                        target * 3,
+                        limit,
+                        flags,
+                        Some(&mut err),
+                    )
+                } else {
+                    meshopt::simplify_with_attributes_and_locks_decoder(
+                        from,
+                        &positions,
+                        &attrs,
+                        &self.weights[..count],
+                        count * std::mem::size_of::<f32>(),
+                        &local_locks,
+                        target * 3,
+                        limit,
+                        flags,
+                        Some(&mut err),
+                    )
+                };
+                (out, err)
+            };
+            let (mut out, mut err) = simplify(&local, limit, self.flags);
+            // Then on to the range's share within `max_error`, as the other plain builds go
+            // on from gltfpack's limit, but without `Prune`: unlimited, it takes whole parts
+            // away to meet a count.
+            let rest = if to_mesh > 0.0 {
+                max_error / to_mesh
+            } else {
+                max_error
+            };
+            if out.len() > target * 3 && rest > limit {
+                let mut flags = self.flags;
+                flags.remove(SimplifyOptions::Prune);
+                let (more, e2) = simplify(&out, rest, flags);
+                (out, err) = (more, err + e2);
+            }
+            let out = out.into_iter().map(|v| used[v as usize]).collect();
+            (out, err * to_mesh)
+        })
+    }
+}

@@ -31,7 +31,9 @@ mod lod_common;
 use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_import::{import_path, ImportOptions};
-use sinew_pipeline::lod::{generate_lods_tuned, plain_work, scene_motion, LodOptions, LodTuning};
+use sinew_pipeline::lod::{
+    generate_lods_tuned, mesh_scale, plain_work, scene_motion, LodOptions, LodTuning,
+};
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
 use std::path::{Path, PathBuf};
@@ -233,7 +235,13 @@ fn main() {
                     max_error: None,
                     ..Default::default()
                 };
-                generate_lods_tuned(&mut m, &options, &tuning).expect("matched LODs");
+                // Built apart from the file's other meshes, with the file's largest mesh as
+                // the scene's, as in the file.
+                let apart = LodTuning {
+                    scene_scale: Some(scene.meshes.iter().map(mesh_scale).fold(0.0, f32::max)),
+                    ..tuning
+                };
+                generate_lods_tuned(&mut m, &options, &apart).expect("matched LODs");
                 for (k, o) in g.iter().enumerate() {
                     let rig = same_rig(&r.scene, o, 1e-4);
                     let (g_rest, g_posed) = r.measure(o, None, rig);

@@ -312,7 +312,7 @@ pub fn build_lods_tuned(
         mesh,
         plain[0].then_some(&mesh.geometry),
         skeleton,
-        (true, mesh_scale(mesh)),
+        (true, tuning.scene_scale.unwrap_or_else(|| mesh_scale(mesh))),
         options,
         tuning,
         &[],
@@ -884,7 +884,7 @@ fn uvs_read(mesh: &Mesh, materials: &[Material]) -> bool {
 
 /// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): gltfpack's
 /// `-si` limit on each mesh is 1% of the largest mesh's (`Plain::Primitives`).
-fn mesh_scale(mesh: &Mesh) -> f32 {
+pub fn mesh_scale(mesh: &Mesh) -> f32 {
     let positions: Vec<[f32; 3]> = mesh
         .geometry
         .positions
@@ -921,7 +921,9 @@ pub fn generate_mesh_lods_timed(
     options.validate()?;
     let reference = &motion.poses;
     let plains = plain_builds_of(meshes, skeleton, tuning, motion);
-    let scene_scale = meshes.iter().map(mesh_scale).fold(0.0f32, f32::max);
+    let scene_scale = tuning
+        .scene_scale
+        .unwrap_or_else(|| meshes.iter().map(mesh_scale).fold(0.0f32, f32::max));
     let one =
         |(mesh, plain): (&mut Mesh, bool)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
             let started = std::time::Instant::now();

@@ -55,6 +55,11 @@ pub struct LodTuning {
     /// ([`super::plain_work`]) is at most this: where they cost little in absolute terms
     /// (docs/lod.md, "Cost"). 0: never.
     pub plain_work_bound: usize,
+    /// The extent (meshoptimizer's: its vertices' largest box side) of the scene's largest mesh,
+    /// which gltfpack's per-range limit is scaled by (`Plain::Primitives`), when meshes are built
+    /// apart from their scene (a tool comparing one mesh at a time); `None`: the largest of the
+    /// meshes given.
+    pub scene_scale: Option<f32>,
 }
 
 impl Default for LodTuning {
@@ -71,6 +76,7 @@ impl Default for LodTuning {
             whole_mesh: true,
             plain_candidate: false,
             plain_work_bound: PLAIN_WORK_BOUND,
+            scene_scale: None,
         }
     }
 }

@@ -369,13 +369,13 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
     ];
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     let whole = meshopt::simplify_scale_decoder(&positions);
-    let target = source.triangle_count() / 4;
-    let build = |scene_scale: f32| {
+    let build = |scene_scale: f32, target: usize| {
         let plains = step::Step::plains(&source, &LodTuning::default(), scene_scale);
         plains[4].run(target, f32::MAX.sqrt(), &Anchors::default())
     };
-    let alone = build(whole);
-    let scaled = build(10.0 * whole);
+    let target = source.triangle_count() / 4;
+    let alone = build(whole, target);
+    let scaled = build(10.0 * whole, target);
     for c in [&alone, &scaled] {
         assert_eq!(c.submeshes.len(), 2);
         for (sub, range) in c.submeshes.iter().zip(&source.submeshes) {
@@ -393,7 +393,7 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
     // gltfpack's weight, `Prune`, the limit relative to the range's own extent; then, above the
     // range's share, on to it without `Prune` (no limit given). The first pass's triangles and the
     // result's.
-    let direct = |range: &Submesh, limit: f32| -> (usize, Vec<u32>) {
+    let direct = |range: &Submesh, limit: f32, target: usize| -> (usize, Vec<u32>) {
         let part = &source.indices
             [range.first_index as usize..(range.first_index + range.index_count) as usize];
         let mut used: Vec<u32> = Vec::new();
@@ -445,8 +445,8 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
             c.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize]
                 .to_vec()
         };
-        let (first_alone, at_one) = direct(range, 0.01);
-        let (first_scaled, at_ten) = direct(range, 0.1);
+        let (first_alone, at_one) = direct(range, 0.01, target);
+        let (first_scaled, at_ten) = direct(range, 0.1, target);
         assert_eq!(got(&alone), at_one, "range {k} at 1%");
         assert_eq!(got(&scaled), at_ten, "range {k} at 10%");
         // The bumps hold a range at 1% above its share; ten times the limit goes further first

@@ -25,93 +25,105 @@ impl Step<'_> {
         } else {
             0
         };
-        // Each range's share rounded down, as gltfpack rounds each primitive's share of its ratio.
-        self.by_range(target_triangles, f64::floor, |part, target| {
-            // The range's vertices in first-use order, as gltfpack reindexes a primitive.
-            let mut used: Vec<u32> = Vec::new();
-            let local: Vec<u32> = part
-                .iter()
-                .map(|&v| {
-                    if local_of[v as usize] == u32::MAX {
-                        local_of[v as usize] = used.len() as u32;
-                        used.push(v);
-                    }
-                    local_of[v as usize]
-                })
-                .collect();
-            for &v in &used {
-                local_of[v as usize] = u32::MAX;
-            }
-            let positions: Vec<[f32; 3]> =
-                used.iter().map(|&v| self.positions[v as usize]).collect();
-            let attrs: Vec<f32> = used
-                .iter()
-                .flat_map(|&v| {
-                    let at = v as usize * count;
-                    self.attrs[at..at + count].iter().copied()
-                })
-                .collect();
-            let local_locks: Vec<SimplifyVertex> =
-                used.iter().map(|&v| locks[v as usize]).collect();
-            let own = meshopt::simplify_scale_decoder(&positions);
-            let to_mesh = if whole > 0.0 { own / whole } else { 1.0 };
-            // gltfpack scales each mesh's limit by the largest mesh's extent over its own
-            // (`-sse` turns it off; on by default): 1% of the largest mesh, in model units.
-            let scaled = if whole > 0.0 && self.scene_scale > whole {
-                PLAIN_ERROR * self.scene_scale / whole
-            } else {
-                PLAIN_ERROR
-            };
-            let limit = if to_mesh > 0.0 {
-                scaled.min(max_error / to_mesh)
-            } else {
-                scaled
-            };
-            let simplify = |from: &[u32], limit: f32, flags: SimplifyOptions| {
-                let mut err = 0.0f32;
-                let out = if count == 0 {
-                    meshopt::simplify_with_locks_decoder(
-                        from,
-                        &positions,
-                        &local_locks,
-                        target * 3,
-                        limit,
-                        flags,
-                        Some(&mut err),
-                    )
+        // Each range's share rounded down, as gltfpack rounds each primitive's share of its ratio;
+        // `go_on`: ranges stopped above their share by the limit go on to it.
+        let mut build = |go_on: bool| {
+            self.by_range(target_triangles, f64::floor, |part, target| {
+                // The range's vertices in first-use order, as gltfpack reindexes a primitive.
+                let mut used: Vec<u32> = Vec::new();
+                let local: Vec<u32> = part
+                    .iter()
+                    .map(|&v| {
+                        if local_of[v as usize] == u32::MAX {
+                            local_of[v as usize] = used.len() as u32;
+                            used.push(v);
+                        }
+                        local_of[v as usize]
+                    })
+                    .collect();
+                for &v in &used {
+                    local_of[v as usize] = u32::MAX;
+                }
+                let positions: Vec<[f32; 3]> =
+                    used.iter().map(|&v| self.positions[v as usize]).collect();
+                let attrs: Vec<f32> = used
+                    .iter()
+                    .flat_map(|&v| {
+                        let at = v as usize * count;
+                        self.attrs[at..at + count].iter().copied()
+                    })
+                    .collect();
+                let local_locks: Vec<SimplifyVertex> =
+                    used.iter().map(|&v| locks[v as usize]).collect();
+                let own = meshopt::simplify_scale_decoder(&positions);
+                let to_mesh = if whole > 0.0 { own / whole } else { 1.0 };
+                // gltfpack scales each mesh's limit by the largest mesh's extent over its own
+                // (`-sse` turns it off; on by default): 1% of the largest mesh, in model units.
+                let scaled = if whole > 0.0 && self.scene_scale > whole {
+                    PLAIN_ERROR * self.scene_scale / whole
                 } else {
-                    meshopt::simplify_with_attributes_and_locks_decoder(
-                        from,
-                        &positions,
-                        &attrs,
-                        &self.weights[..count],
-                        count * std::mem::size_of::<f32>(),
-                        &local_locks,
-                        target * 3,
-                        limit,
-                        flags,
-                        Some(&mut err),
-                    )
+                    PLAIN_ERROR
                 };
-                (out, err)
-            };
-            let (mut out, mut err) = simplify(&local, limit, self.flags);
-            // Then on to the range's share within `max_error`, as the other plain builds go
-            // on from gltfpack's limit, but without `Prune`: unlimited, it takes whole parts
-            // away to meet a count.
-            let rest = if to_mesh > 0.0 {
-                max_error / to_mesh
-            } else {
-                max_error
-            };
-            if out.len() > target * 3 && rest > limit {
-                let mut flags = self.flags;
-                flags.remove(SimplifyOptions::Prune);
-                let (more, e2) = simplify(&out, rest, flags);
-                (out, err) = (more, err + e2);
-            }
-            let out = out.into_iter().map(|v| used[v as usize]).collect();
-            (out, err * to_mesh)
-        })
+                let limit = if to_mesh > 0.0 {
+                    scaled.min(max_error / to_mesh)
+                } else {
+                    scaled
+                };
+                let simplify = |from: &[u32], limit: f32, flags: SimplifyOptions| {
+                    let mut err = 0.0f32;
+                    let out = if count == 0 {
+                        meshopt::simplify_with_locks_decoder(
+                            from,
+                            &positions,
+                            &local_locks,
+                            target * 3,
+                            limit,
+                            flags,
+                            Some(&mut err),
+                        )
+                    } else {
+                        meshopt::simplify_with_attributes_and_locks_decoder(
+                            from,
+                            &positions,
+                            &attrs,
+                            &self.weights[..count],
+                            count * std::mem::size_of::<f32>(),
+                            &local_locks,
+                            target * 3,
+                            limit,
+                            flags,
+                            Some(&mut err),
+                        )
+                    };
+                    (out, err)
+                };
+                let (mut out, mut err) = simplify(&local, limit, self.flags);
+                // Then on to the range's share within `max_error` (`go_on`), as the other plain
+                // builds go on from gltfpack's limit, but without `Prune`: unlimited, it takes whole
+                // parts away to meet a count.
+                let rest = if to_mesh > 0.0 {
+                    max_error / to_mesh
+                } else {
+                    max_error
+                };
+                if go_on && out.len() > target * 3 && rest > limit {
+                    let mut flags = self.flags;
+                    flags.remove(SimplifyOptions::Prune);
+                    let (more, e2) = simplify(&out, rest, flags);
+                    (out, err) = (more, err + e2);
+                }
+                let out = out.into_iter().map(|v| used[v as usize]).collect();
+                (out, err * to_mesh)
+            })
+        };
+        // gltfpack's build where it meets the target; otherwise the ranges go on (only then:
+        // past the limit, every range to its rounded-down share would add error for triangles
+        // the target does not ask for). Not within the builder's slack of a triangle per range:
+        // a build that removed nothing would be the closest.
+        let first = build(false);
+        if first.indices.len() <= 3 * target_triangles {
+            return first;
+        }
+        build(true)
     }
 }

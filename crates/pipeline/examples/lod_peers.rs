@@ -172,6 +172,12 @@ fn main() {
                 .collect();
             outs.push((label.into(), runs));
         }
+        // The chains at gltfpack's counts are built one mesh apart from the file's others,
+        // with the file's largest mesh as the scene's, as in the file.
+        let apart = LodTuning {
+            scene_scale: Some(scene.meshes.iter().map(mesh_scale).fold(0.0, f32::max)),
+            ..tuning
+        };
         // sinew's default chain, every mesh.
         let mut s = scene.clone();
         generate_lods_tuned(&mut s, &LodOptions::default(), &tuning).expect("LODs");
@@ -234,12 +240,6 @@ fn main() {
                     ratios,
                     max_error: None,
                     ..Default::default()
-                };
-                // Built apart from the file's other meshes, with the file's largest mesh as
-                // the scene's, as in the file.
-                let apart = LodTuning {
-                    scene_scale: Some(scene.meshes.iter().map(mesh_scale).fold(0.0, f32::max)),
-                    ..tuning
                 };
                 generate_lods_tuned(&mut m, &options, &apart).expect("matched LODs");
                 for (k, o) in g.iter().enumerate() {

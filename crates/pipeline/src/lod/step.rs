@@ -749,32 +749,16 @@ impl<'a> Step<'a> {
         target: usize,
         max_error: f32,
     ) -> (Vec<u32>, f32) {
-        let mut err = 0.0f32;
-        if self.count == 0 {
-            let out = meshopt::simplify_with_locks_decoder(
-                part,
-                &self.positions,
-                locks,
-                target * 3,
-                max_error,
-                self.flags,
-                Some(&mut err),
-            );
-            return (out, err);
-        }
-        let out = meshopt::simplify_with_attributes_and_locks_decoder(
+        let attrs = (&self.attrs[..], &self.weights[..self.count]);
+        simplify_edges(
             part,
             &self.positions,
-            &self.attrs,
-            &self.weights[..self.count],
-            self.count * std::mem::size_of::<f32>(),
+            attrs,
             locks,
-            target * 3,
+            target,
             max_error,
             self.flags,
-            Some(&mut err),
-        );
-        (out, err)
+        )
     }
 
     /// Simplifies the source to about `target_triangles` within `max_error` (relative to its
@@ -858,6 +842,47 @@ impl<'a> Step<'a> {
         optimize_ranges(&mut indices, &c.submeshes, self.source.positions.len());
         compact(self.source, indices, c.submeshes)
     }
+}
+
+/// meshoptimizer's edge-collapse simplifier on `part` (indices into `positions`) towards
+/// `target` triangles within `max_error` (relative to the extent of `positions`): with the
+/// attributes `attrs` (values, then one weight per attribute of a vertex) when there are any, on
+/// positions alone otherwise. The result and meshoptimizer's error.
+pub(super) fn simplify_edges(
+    part: &[u32],
+    positions: &[[f32; 3]],
+    (values, weights): (&[f32], &[f32]),
+    locks: &[SimplifyVertex],
+    target: usize,
+    max_error: f32,
+    flags: SimplifyOptions,
+) -> (Vec<u32>, f32) {
+    let mut err = 0.0f32;
+    let out = if weights.is_empty() {
+        meshopt::simplify_with_locks_decoder(
+            part,
+            positions,
+            locks,
+            target * 3,
+            max_error,
+            flags,
+            Some(&mut err),
+        )
+    } else {
+        meshopt::simplify_with_attributes_and_locks_decoder(
+            part,
+            positions,
+            values,
+            weights,
+            std::mem::size_of_val(weights),
+            locks,
+            target * 3,
+            max_error,
+            flags,
+            Some(&mut err),
+        )
+    };
+    (out, err)
 }
 
 /// The triangles of `simplified` (indices into `source`'s vertices) grouped by the material range

@@ -32,7 +32,7 @@ use lod_common::{pose_palette, same_rig, soup};
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_import::{import_path, ImportOptions};
 use sinew_pipeline::lod::{
-    generate_lods_tuned, mesh_scale, plain_work, scene_motion, LodOptions, LodTuning,
+    generate_lods_tuned, largest_range_scale, plain_work, scene_motion, LodOptions, LodTuning,
 };
 use sinew_scene::Scene;
 use sinew_testdata::geometry::{diagonal, hausdorff};
@@ -173,9 +173,15 @@ fn main() {
             outs.push((label.into(), runs));
         }
         // The chains at gltfpack's counts are built one mesh apart from the file's others,
-        // with the file's largest mesh as the scene's, as in the file.
+        // with the file's largest material range as the scene's, as in the file.
         let apart = LodTuning {
-            scene_scale: Some(scene.meshes.iter().map(mesh_scale).fold(0.0, f32::max)),
+            scene_scale: Some(
+                scene
+                    .meshes
+                    .iter()
+                    .map(largest_range_scale)
+                    .fold(0.0, f32::max),
+            ),
             ..tuning
         };
         // sinew's default chain, every mesh.

@@ -35,7 +35,7 @@
 //!   alone, gltfpack's `-si -sa` way with its sloppy pass, that sloppy pass on the part's
 //!   vertices alone asked for as many triangles as its grid gives within the target, and
 //!   gltfpack's `-si` on each material range alone as on a glTF export's primitives, its limit
-//!   scaled by the scene's largest mesh: `Step::plains`; for a mesh whose UVs no texture reads,
+//!   scaled by the scene's largest range: `Step::plains`; for a mesh whose UVs no texture reads,
 //!   these five from LOD 0 welded without its UVs and five more with their seams held), each
 //!   kept instead when it has no more
 //!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
@@ -313,7 +313,9 @@ pub fn build_lods_tuned(
         plain[0].then_some(&mesh.geometry),
         skeleton,
         true,
-        tuning.scene_scale.unwrap_or_else(|| mesh_scale(mesh)),
+        tuning
+            .scene_scale
+            .unwrap_or_else(|| largest_range_scale(mesh)),
         options,
         tuning,
         &[],
@@ -884,8 +886,8 @@ fn uvs_read(mesh: &Mesh, materials: &[Material]) -> bool {
         })
 }
 
-/// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): gltfpack's
-/// `-si` limit on each mesh is 1% of the largest mesh's (`Plain::Primitives`).
+/// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): what a LOD's
+/// relative error is of.
 pub fn mesh_scale(mesh: &Mesh) -> f32 {
     let positions: Vec<[f32; 3]> = mesh
         .geometry
@@ -898,6 +900,47 @@ pub fn mesh_scale(mesh: &Mesh) -> f32 {
     } else {
         meshopt::simplify_scale_decoder(&positions)
     }
+}
+
+/// The extent (as [`mesh_scale`] measures it) of a mesh's largest material range, on the vertices
+/// its triangles use: gltfpack converts each range to a primitive of its own and scales each
+/// primitive's `-si` limit by the largest primitive's extent over its own (`Plain::Primitives`).
+pub fn largest_range_scale(mesh: &Mesh) -> f32 {
+    let g = &mesh.geometry;
+    let ranges: Vec<&[u32]> = if g.submeshes.is_empty() {
+        vec![&g.indices[..]]
+    } else {
+        g.submeshes
+            .iter()
+            .filter_map(|s| {
+                let from = s.first_index as usize;
+                g.indices.get(from..from + s.index_count as usize)
+            })
+            .collect()
+    };
+    let mut seen = vec![false; g.positions.len()];
+    ranges
+        .into_iter()
+        .map(|range| {
+            let mut used: Vec<[f32; 3]> = Vec::new();
+            for &v in range {
+                if let Some(s) = seen.get_mut(v as usize).filter(|s| !**s) {
+                    *s = true;
+                    used.push(g.positions[v as usize].to_array());
+                }
+            }
+            for &v in range {
+                if let Some(s) = seen.get_mut(v as usize) {
+                    *s = false;
+                }
+            }
+            if used.is_empty() {
+                0.0
+            } else {
+                meshopt::simplify_scale_decoder(&used)
+            }
+        })
+        .fold(0.0f32, f32::max)
 }
 
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.
@@ -923,9 +966,12 @@ pub fn generate_mesh_lods_timed(
     options.validate()?;
     let reference = &motion.poses;
     let plains = plain_builds_of(meshes, skeleton, tuning, motion);
-    let scene_scale = tuning
-        .scene_scale
-        .unwrap_or_else(|| meshes.iter().map(mesh_scale).fold(0.0f32, f32::max));
+    let scene_scale = tuning.scene_scale.unwrap_or_else(|| {
+        meshes
+            .iter()
+            .map(largest_range_scale)
+            .fold(0.0f32, f32::max)
+    });
     let one =
         |(mesh, plain): (&mut Mesh, bool)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
             let started = std::time::Instant::now();

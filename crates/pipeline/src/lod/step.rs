@@ -55,10 +55,10 @@ pub struct LodTuning {
     /// ([`super::plain_work`]) is at most this: where they cost little in absolute terms
     /// (docs/lod.md, "Cost"). 0: never.
     pub plain_work_bound: usize,
-    /// The extent (meshoptimizer's: its vertices' largest box side) of the scene's largest mesh,
-    /// which gltfpack's per-range limit is scaled by (`Plain::Primitives`), when meshes are built
-    /// apart from their scene (a tool comparing one mesh at a time); `None`: the largest of the
-    /// meshes given.
+    /// The extent (meshoptimizer's: its vertices' largest box side) of the scene's largest
+    /// material range ([`super::largest_range_scale`]), which gltfpack's per-range limit is scaled
+    /// by (`Plain::Primitives`), when meshes are built apart from their scene (a tool comparing
+    /// one mesh at a time); `None`: the largest of the meshes given.
     pub scene_scale: Option<f32>,
 }
 
@@ -125,11 +125,10 @@ pub(super) enum Plain {
     /// ([`Step::sloppy_within`]): more triangles, not always closer, so a build of its own.
     SloppyNear,
     /// gltfpack's `-si` as it meets a glTF export: each material range is a primitive of its own,
-    /// simplified alone on its own vertices, within 1% of its extent scaled by the largest mesh's
-    /// extent over its mesh's (gltfpack's default `-ss`), and it stops at that limit (no going on
-    /// to the target: on the way there meshoptimizer's `Prune`, unlimited, removes whole parts).
-    /// More triangles than the target where the limit stops it, so kept only where the other
-    /// builds stop above the target too ([`Step::run_primitives`]).
+    /// simplified alone on its own vertices, within 1% of its extent scaled by the scene's
+    /// largest range's extent over its own (gltfpack's default `-ss`). Where those passes miss
+    /// the target, the ranges above their share go on to it without `Prune` (unlimited, it
+    /// removes whole parts) ([`Step::run_primitives`]).
     Primitives,
 }
 
@@ -451,7 +450,8 @@ pub(super) struct Step<'a> {
     count: usize,
     /// Where a plain build's first passes are kept for the other plain builds of its settings.
     first_passes: Option<std::sync::Arc<FirstPasses>>,
-    /// [`Plain::Primitives`]: the extent of the scene's largest mesh, which gltfpack's 1% is of.
+    /// [`Plain::Primitives`]: the extent of the scene's largest material range, which gltfpack's
+    /// 1% is of.
     scene_scale: f32,
 }
 
@@ -526,7 +526,7 @@ impl<'a> Step<'a> {
     /// [`Plain::Sloppy`], [`Plain::SloppyNear`] and [`Plain::Primitives`], in that order), sharing what they compute
     /// alike: the vertex positions, material ranges and position ids, and the first pass of the
     /// normals and sloppy builds ([`FirstPasses`]).
-    /// `scene_scale`: the extent (meshoptimizer's) of the scene's largest mesh, for
+    /// `scene_scale`: the extent (meshoptimizer's) of the scene's largest material range, for
     /// [`Plain::Primitives`].
     pub(super) fn plains(source: &'a Lod, tuning: &LodTuning, scene_scale: f32) -> Vec<Self> {
         let mut normals = Step::plain(source, tuning, Plain::Normals);

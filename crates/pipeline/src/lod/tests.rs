@@ -348,13 +348,15 @@ fn uvs_are_read_where_a_texture_may_read_them() {
 
 /// The plain build per material range (`Plain::Primitives`, gltfpack's `-si` on a glTF export's
 /// primitives): no triangle leaves its range, each range is meshoptimizer's result on that range's
-/// vertices alone, and its limit grows with the scene's largest mesh (gltfpack's default `-ss`):
-/// 1% of the range's extent when this mesh is the largest, ten times that when the largest is ten
-/// times this one.
+/// vertices alone, and its limit is 1% of the scene's largest range (gltfpack's default `-ss`
+/// scales each primitive's limit by the largest primitive's extent over its own): the small cap
+/// goes further than 1% of its own extent, and every range ten times further when the scene's
+/// largest range is ten times this mesh's.
 #[test]
 fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit() {
     let mut source = sphere(12, 24);
-    let half = (source.indices.len() / 6 * 3) as u32;
+    // A small cap (the first two rings) and the rest of the sphere.
+    let half = (2 * 24 * 3) as u32;
     source.submeshes = vec![
         Submesh {
             first_index: 0,
@@ -439,16 +441,28 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
             out.iter().map(|&v| used[v as usize]).collect(),
         )
     };
+    let mut extents = Vec::new();
     for (k, range) in source.submeshes.iter().enumerate() {
+        let mut used: Vec<[f32; 3]> = source.indices
+            [range.first_index as usize..(range.first_index + range.index_count) as usize]
+            .iter()
+            .map(|&v| positions[v as usize])
+            .collect();
+        used.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+        used.dedup();
+        let own = meshopt::simplify_scale_decoder(&used);
+        extents.push(own);
+        // The scene's largest range is the sphere's rest (as wide as the sphere) or ten times it.
+        let limit = 0.01 * whole / own;
         let got = |c: &step::Candidate| {
             let sub = &c.submeshes[k];
             c.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize]
                 .to_vec()
         };
-        let (first_alone, at_one) = direct(range, 0.01, target);
-        let (first_scaled, at_ten) = direct(range, 0.1, target);
-        assert_eq!(got(&alone), at_one, "range {k} at 1%");
-        assert_eq!(got(&scaled), at_ten, "range {k} at 10%");
+        let (first_alone, at_one) = direct(range, limit, target);
+        let (first_scaled, at_ten) = direct(range, 10.0 * limit, target);
+        assert_eq!(got(&alone), at_one, "range {k} at {limit}");
+        assert_eq!(got(&scaled), at_ten, "range {k} at {}", 10.0 * limit);
         // The bumps hold a range at 1% above its share; ten times the limit goes further first
         // (so the two builds differ in how they get to the share).
         assert!(
@@ -457,4 +471,6 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
         );
     }
     assert_ne!(alone.indices, scaled.indices);
+    // The cap is the smaller range: its limit is more than 1% of its own extent.
+    assert!(extents[0] < 0.8 * extents[1], "{extents:?}");
 }

@@ -396,50 +396,18 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
     // range's share, on to it without `Prune` (no limit given). The first pass's triangles and the
     // result's.
     let direct = |range: &Submesh, limit: f32, target: usize| -> (usize, Vec<u32>) {
-        let part = &source.indices
-            [range.first_index as usize..(range.first_index + range.index_count) as usize];
-        let mut used: Vec<u32> = Vec::new();
-        let local: Vec<u32> = part
-            .iter()
-            .map(|&v| match used.iter().position(|&u| u == v) {
-                Some(i) => i as u32,
-                None => {
-                    used.push(v);
-                    used.len() as u32 - 1
-                }
-            })
-            .collect();
-        let p: Vec<[f32; 3]> = used.iter().map(|&v| positions[v as usize]).collect();
-        let n: Vec<f32> = used
-            .iter()
-            .flat_map(|&v| source.normals[v as usize].to_array())
-            .collect();
-        let locks = vec![SimplifyVertex::None; p.len()];
-        let share = part.len() / 3 * target / source.triangle_count();
-        let pass = |from: &[u32], limit: f32, flags| {
-            meshopt::simplify_with_attributes_and_locks_decoder(
-                from,
-                &p,
-                &n,
-                &[0.5; 3],
-                12,
-                &locks,
-                share * 3,
-                limit,
-                flags,
-                None,
-            )
-        };
-        let first = pass(&local, limit, meshopt::SimplifyOptions::Prune);
-        let out = if first.len() > share * 3 {
-            pass(&first, f32::MAX.sqrt(), meshopt::SimplifyOptions::empty())
-        } else {
-            first.clone()
-        };
-        (
-            first.len() / 3,
-            out.iter().map(|&v| used[v as usize]).collect(),
-        )
+        let share = range.index_count as usize / 3 * target / source.triangle_count();
+        let passes = range_passes(
+            &source,
+            range,
+            share,
+            &[
+                (limit, meshopt::SimplifyOptions::Prune),
+                (f32::MAX.sqrt(), meshopt::SimplifyOptions::empty()),
+            ],
+        );
+        let last = passes.last().map(|p| p.0.clone()).unwrap_or_default();
+        (passes[0].0.len() / 3, last)
     };
     let mut extents = Vec::new();
     for (k, range) in source.submeshes.iter().enumerate() {
@@ -473,4 +441,141 @@ fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit
     assert_ne!(alone.indices, scaled.indices);
     // The cap is the smaller range: its limit is more than 1% of its own extent.
     assert!(extents[0] < 0.8 * extents[1], "{extents:?}");
+}
+
+/// meshoptimizer on one material range of `source` alone, as gltfpack gives it a primitive: the
+/// range's vertices in first-use order, normals at 0.5, towards `share` triangles; each of
+/// `passes` (limit relative to the range's extent, options) from the one before, while above the
+/// share. Each pass's triangles (indices into `source`) and error.
+fn range_passes(
+    source: &Lod,
+    range: &Submesh,
+    share: usize,
+    passes: &[(f32, meshopt::SimplifyOptions)],
+) -> Vec<(Vec<u32>, f32)> {
+    let part = &source.indices
+        [range.first_index as usize..(range.first_index + range.index_count) as usize];
+    let mut used: Vec<u32> = Vec::new();
+    let local: Vec<u32> = part
+        .iter()
+        .map(|&v| match used.iter().position(|&u| u == v) {
+            Some(i) => i as u32,
+            None => {
+                used.push(v);
+                used.len() as u32 - 1
+            }
+        })
+        .collect();
+    let p: Vec<[f32; 3]> = used
+        .iter()
+        .map(|&v| source.positions[v as usize].to_array())
+        .collect();
+    let n: Vec<f32> = used
+        .iter()
+        .flat_map(|&v| source.normals[v as usize].to_array())
+        .collect();
+    let locks = vec![SimplifyVertex::None; p.len()];
+    let mut out = Vec::new();
+    let mut from = local;
+    for (k, &(limit, flags)) in passes.iter().enumerate() {
+        if k > 0 && from.len() <= share * 3 {
+            break;
+        }
+        let mut err = 0.0f32;
+        from = meshopt::simplify_with_attributes_and_locks_decoder(
+            &from,
+            &p,
+            &n,
+            &[0.5; 3],
+            12,
+            &locks,
+            share * 3,
+            limit,
+            flags,
+            Some(&mut err),
+        );
+        out.push((from.iter().map(|&v| used[v as usize]).collect(), err));
+    }
+    out
+}
+
+/// Where gltfpack's passes per range remove more than the target asks, the per-range plain build
+/// gives the triangles to spare back: the range that lost the most (its error in the mesh's
+/// units) comes out whole, the other as gltfpack's pass left it, and the build has no more
+/// triangles than the target.
+#[test]
+fn the_per_range_plain_build_gives_triangles_to_spare_back_to_the_range_that_lost_the_most() {
+    let mut source = sphere(12, 24);
+    let cut = (2 * 24 * 3) as u32;
+    source.submeshes = vec![
+        Submesh {
+            first_index: 0,
+            index_count: cut,
+            material: "a".into(),
+        },
+        Submesh {
+            first_index: cut,
+            index_count: source.indices.len() as u32 - cut,
+            material: "b".into(),
+        },
+    ];
+    let extent = |points: Vec<[f32; 3]>| meshopt::simplify_scale_decoder(&points);
+    let whole = extent(source.positions.iter().map(|p| p.to_array()).collect());
+    let total = source.triangle_count();
+    // One triangle fewer than LOD 0: each range's share is one triangle fewer than its own, and
+    // one edge collapse takes two.
+    let target = total - 1;
+    let mut firsts = Vec::new();
+    for range in &source.submeshes {
+        let part = &source.indices
+            [range.first_index as usize..(range.first_index + range.index_count) as usize];
+        let own = extent(
+            part.iter()
+                .map(|&v| source.positions[v as usize].to_array())
+                .collect(),
+        );
+        let share = part.len() / 3 * target / total;
+        let limit = 0.01 * whole / own;
+        let pass = range_passes(
+            &source,
+            range,
+            share,
+            &[(limit, meshopt::SimplifyOptions::Prune)],
+        );
+        let (tris, err) = pass[0].clone();
+        firsts.push((tris, err * own / whole, part.to_vec()));
+    }
+    let made: usize = firsts.iter().map(|f| f.0.len() / 3).sum();
+    assert!(
+        made < target,
+        "the passes remove more than asked: {made} of {total}"
+    );
+    let plains = step::Step::plains(&source, &LodTuning::default(), whole);
+    let built = plains[4].run(target, f32::MAX.sqrt(), &Anchors::default());
+    assert!(built.indices.len() / 3 <= target);
+    assert!(
+        built.indices.len() / 3 > made,
+        "{}",
+        built.indices.len() / 3
+    );
+    let worst = if firsts[0].1 >= firsts[1].1 { 0 } else { 1 };
+    let triangles = |indices: &[u32]| {
+        let mut t: Vec<[u32; 3]> = indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        t.sort_unstable();
+        t
+    };
+    for (k, sub) in built.submeshes.iter().enumerate() {
+        let ours = triangles(
+            &built.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize],
+        );
+        let expected = if k == worst {
+            triangles(&firsts[k].2)
+        } else {
+            triangles(&firsts[k].0)
+        };
+        assert_eq!(ours, expected, "range {k} (the worst: {worst})");
+    }
 }

@@ -649,7 +649,7 @@ fn build_lods_timed(
                     continue;
                 };
                 let r2 = reference_score(plain, &other.indices);
-                if r2 <= reference_limit {
+                if r2 <= reference_limit.max(limit) {
                     (best, limit, reference_limit) = ((other, m2, Some(i)), s2, r2);
                 }
             }
@@ -704,7 +704,7 @@ fn build_lods_timed(
                         )
                         .filter(|m2| score(from, &again.indices, m2, limit).is_some());
                         if let Some(m2) = closer {
-                            if reference_score(from, &again.indices) <= reference_limit {
+                            if reference_score(from, &again.indices) <= reference_limit.max(limit) {
                                 best = (again, m2, best.2);
                             }
                         }

@@ -130,6 +130,10 @@ pub(super) enum Plain {
     /// the target, the ranges above their share go on to it without `Prune` (unlimited, it
     /// removes whole parts) ([`Step::run_primitives`]).
     Primitives,
+    /// gltfpack's `-si -sa` as it meets a glTF export: [`Plain::Primitives`]' first passes, then
+    /// each range above its share given to meshoptimizer's sloppy simplifier alone, within 10% of
+    /// its extent ([`Step::run_primitives`]).
+    PrimitivesSloppy,
 }
 
 /// A plain build's attributes (values, per-vertex count), weights and options ([`Step::plain`]):
@@ -522,8 +526,9 @@ impl<'a> Step<'a> {
         Step::assemble(source, tuning, attrs, weights, flags, Some(kind))
     }
 
-    /// The five plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`],
-    /// [`Plain::Sloppy`], [`Plain::SloppyNear`] and [`Plain::Primitives`], in that order), sharing what they compute
+    /// The six plain builds of `source` ([`Plain::Normals`], [`Plain::Positions`],
+    /// [`Plain::Sloppy`], [`Plain::SloppyNear`], [`Plain::Primitives`] and
+    /// [`Plain::PrimitivesSloppy`], in that order), sharing what they compute
     /// alike: the vertex positions, material ranges and position ids, and the first pass of the
     /// normals and sloppy builds ([`FirstPasses`]).
     /// `scene_scale`: the extent (meshoptimizer's) of the scene's largest material range, for
@@ -536,10 +541,19 @@ impl<'a> Step<'a> {
         let mut near = normals.plain_like(Plain::SloppyNear);
         let mut primitives = normals.plain_like(Plain::Primitives);
         primitives.scene_scale = scene_scale;
+        let mut primitives_sloppy = normals.plain_like(Plain::PrimitivesSloppy);
+        primitives_sloppy.scene_scale = scene_scale;
         normals.first_passes = Some(std::sync::Arc::clone(&first_passes));
         sloppy.first_passes = Some(std::sync::Arc::clone(&first_passes));
         near.first_passes = Some(first_passes);
-        vec![normals, positions, sloppy, near, primitives]
+        vec![
+            normals,
+            positions,
+            sloppy,
+            near,
+            primitives,
+            primitives_sloppy,
+        ]
     }
 
     /// A plain build of this step's source of another kind, with this step's positions, material
@@ -765,8 +779,8 @@ impl<'a> Step<'a> {
     /// extent), `keep`'s vertices locked or given priority.
     pub(super) fn run(&self, target_triangles: usize, max_error: f32, keep: &Anchors) -> Candidate {
         let source = self.source;
-        if self.plain == Some(Plain::Primitives) {
-            return self.run_primitives(target_triangles, max_error, keep);
+        if let Some(kind @ (Plain::Primitives | Plain::PrimitivesSloppy)) = self.plain {
+            return self.run_primitives(target_triangles, max_error, keep, kind);
         }
         if self.whole {
             let target = target_triangles.min(source.triangle_count());

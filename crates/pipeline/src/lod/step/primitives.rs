@@ -1,7 +1,7 @@
 //! The plain build per material range ([`Plain::Primitives`](super::Plain::Primitives)):
 //! gltfpack's `-si` as it meets a glTF export, each range a primitive of its own.
 
-use super::{simplify_edges, Anchors, Candidate, Step, PLAIN_ERROR};
+use super::{simplify_edges, Anchors, Candidate, Plain, Step, PLAIN_ERROR, SLOPPY_ERROR};
 use meshopt::{SimplifyOptions, SimplifyVertex};
 
 impl Step<'_> {
@@ -20,6 +20,7 @@ impl Step<'_> {
         target_triangles: usize,
         max_error: f32,
         keep: &Anchors,
+        kind: Plain,
     ) -> Candidate {
         let locks = self.flags(false, keep);
         let whole = meshopt::simplify_scale_decoder(&self.positions);
@@ -111,6 +112,24 @@ impl Step<'_> {
                                 (out, err)
                             }
                         }
+                        // gltfpack's `-sa`: the sloppy simplifier on the range alone (no locks)
+                        // within 10% of its extent (not scaled), on to its share.
+                        Pass::Sloppy => {
+                            let (out, err) = std::mem::take(&mut firsts[k]);
+                            if out.len() > target * 3 {
+                                let mut more = 0.0f32;
+                                let sloppy = meshopt::simplify_sloppy_decoder(
+                                    &out,
+                                    &positions,
+                                    target * 3,
+                                    SLOPPY_ERROR.min(rest),
+                                    Some(&mut more),
+                                );
+                                (sloppy, err.max(more))
+                            } else {
+                                (out, err)
+                            }
+                        }
                         Pass::Spend(counts) => match counts.get(k).copied().flatten() {
                             Some(to) if to * 3 >= local.len() => (local, 0.0),
                             Some(to) => simplify(&local, limit, self.flags, to),
@@ -128,6 +147,13 @@ impl Step<'_> {
         // Not within the builder's slack of a triangle per range: a build that removed nothing
         // would be the closest.
         let first = build(&Pass::First { deep: false }, &mut firsts, &mut sizes);
+        if kind == Plain::PrimitivesSloppy {
+            return if first.indices.len() <= 3 * target_triangles {
+                first
+            } else {
+                build(&Pass::Sloppy, &mut firsts, &mut sizes)
+            };
+        }
         let (made, passes) = if first.indices.len() <= 3 * target_triangles {
             (first.indices.len() / 3, firsts)
         } else {
@@ -172,6 +198,8 @@ enum Pass {
     First { deep: bool },
     /// The first pass, then on to the share within the budget.
     GoOn,
+    /// The first pass, then the sloppy simplifier on to the share ([`Plain::PrimitivesSloppy`]).
+    Sloppy,
     /// The first (or deep) pass, but for the ranges given a count (in the order of the ranges simplified):
     /// kept whole at their own count, else simplified again within the limit to that count.
     Spend(Vec<Option<usize>>),

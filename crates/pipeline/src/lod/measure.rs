@@ -7,6 +7,7 @@ use crate::surface::{sample_points, TriangleGrid};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::Lod;
+use sinew_scene::Mesh;
 
 /// At most this many far LOD 0 vertices are locked when a step is built again.
 pub(super) const REPAIR_VERTICES: usize = 16;
@@ -299,4 +300,61 @@ pub(super) fn repair_locks(source: &Lod, points: &[Vec3]) -> Vec<[u32; 3]> {
     out.sort_unstable();
     out.dedup();
     out
+}
+
+/// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): what a LOD's
+/// relative error is of.
+pub fn mesh_scale(mesh: &Mesh) -> f32 {
+    let positions: Vec<[f32; 3]> = mesh
+        .geometry
+        .positions
+        .iter()
+        .map(|p| p.to_array())
+        .collect();
+    if positions.is_empty() {
+        0.0
+    } else {
+        meshopt::simplify_scale_decoder(&positions)
+    }
+}
+
+/// The extent (as [`mesh_scale`] measures it) of a mesh's largest material range, on the vertices
+/// its triangles use: gltfpack converts each range to a primitive of its own and scales each
+/// primitive's `-si` limit by the largest primitive's extent over its own (`Plain::Primitives`).
+pub fn largest_range_scale(mesh: &Mesh) -> f32 {
+    let g = &mesh.geometry;
+    let ranges: Vec<&[u32]> = if g.submeshes.is_empty() {
+        vec![&g.indices[..]]
+    } else {
+        g.submeshes
+            .iter()
+            .filter_map(|s| {
+                let from = s.first_index as usize;
+                g.indices.get(from..from + s.index_count as usize)
+            })
+            .collect()
+    };
+    let mut seen = vec![false; g.positions.len()];
+    ranges
+        .into_iter()
+        .map(|range| {
+            let mut used: Vec<[f32; 3]> = Vec::new();
+            for &v in range {
+                if let Some(s) = seen.get_mut(v as usize).filter(|s| !**s) {
+                    *s = true;
+                    used.push(g.positions[v as usize].to_array());
+                }
+            }
+            for &v in range {
+                if let Some(s) = seen.get_mut(v as usize) {
+                    *s = false;
+                }
+            }
+            if used.is_empty() {
+                0.0
+            } else {
+                meshopt::simplify_scale_decoder(&used)
+            }
+        })
+        .fold(0.0f32, f32::max)
 }

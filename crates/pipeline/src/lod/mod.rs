@@ -30,19 +30,19 @@
 //!   triangle around it, the step is built again and the closer build is kept (`measure`);
 //! - on a mesh whose plain builds cost little ([`plain_work`] within
 //!   `LodTuning::plain_work_bound`, or within the share of a file's clips: [`SceneMotion`]), and
-//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), five plain
+//!   on every mesh with `LodTuning::plain_candidate` (`convert --effort max`), six plain
 //!   builds of the same target from LOD 0 as it came in (gltfpack's `-si` way, on positions
 //!   alone, gltfpack's `-si -sa` way with its sloppy pass, that sloppy pass on the part's
 //!   vertices alone asked for as many triangles as its grid gives within the target, and
-//!   gltfpack's `-si` on each material range alone as on a glTF export's primitives, its limit
-//!   scaled by the scene's largest range: `Step::plains`; for a mesh whose UVs no texture reads,
-//!   these five from LOD 0 welded without its UVs and five more with their seams held), each
-//!   kept instead when it has no more
-//!   triangles, is closer to LOD 0 at rest (LOD 0's vertices, centroids and edge midpoints) and
-//!   under the test poses, and is no farther under poses sampled from the scene's clips
-//!   ([`reference_poses`]; ties keep the step's own build); then a posed repair build of the best
-//!   one (LOD 0's farthest vertices in the pose where it is farthest locked, kept on the same
-//!   terms).
+//!   gltfpack's `-si` and `-si -sa` on each material range alone as on a glTF export's
+//!   primitives, each range's limit 1% of the scene's largest range: `Step::plains`; for a mesh
+//!   whose UVs no texture reads, these six from LOD 0 welded without its UVs and six more with
+//!   their seams held), each kept instead when it has no more triangles, is closer to LOD 0 at
+//!   rest (LOD 0's vertices, centroids and edge midpoints) and under the test poses, and is no
+//!   farther under poses sampled from the scene's clips ([`reference_poses`]) than the best
+//!   build's farthest distance at rest, in the test poses and in those poses (ties keep the
+//!   step's own build); then a posed repair build of the best one (LOD 0's farthest vertices in
+//!   the pose where it is farthest locked, kept on the same terms).
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -60,6 +60,7 @@ use measure::{
     distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
     with_points, Measured,
 };
+pub use measure::{largest_range_scale, mesh_scale};
 use motion::plain_builds_of;
 pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, SceneMotion};
 use rayon::prelude::*;
@@ -592,9 +593,11 @@ fn build_lods_timed(
         // The current build against the plain ones (`Step::plain`, from LOD 0: gltfpack's way,
         // on positions alone, and gltfpack's sloppy way): a plain build is kept when it has no
         // more triangles, is closer by `score` than every build before it and no farther by
-        // `reference_score` (a veto, not part of `score`: one far pose of many must not outweigh
-        // rest and the test poses); ties keep the earlier build. Also says which plain build was
-        // kept, if any.
+        // `reference_score` than the best build's farthest distance of either kind (a veto, not
+        // part of `score`: one far pose of many must not outweigh rest and the test poses; but a
+        // build nearly exact in the reference poses must not veto one closer everywhere it
+        // counts: Sentry's, docs/lod.md); ties keep the earlier build. Also says which plain
+        // build was kept, if any.
         // Each plain build of this level, once: they read only `keep.hard` of the anchors (the
         // retry with UV seams open below differs in nothing else), so the retry reuses them.
         let plain_built: Vec<std::cell::OnceCell<Candidate>> =
@@ -884,63 +887,6 @@ fn uvs_read(mesh: &Mesh, materials: &[Material]) -> bool {
                 .find(|m| m.name == s.material)
                 .is_none_or(|m| m.texture.is_some())
         })
-}
-
-/// A mesh's extent as meshoptimizer measures it (its vertices' largest box side): what a LOD's
-/// relative error is of.
-pub fn mesh_scale(mesh: &Mesh) -> f32 {
-    let positions: Vec<[f32; 3]> = mesh
-        .geometry
-        .positions
-        .iter()
-        .map(|p| p.to_array())
-        .collect();
-    if positions.is_empty() {
-        0.0
-    } else {
-        meshopt::simplify_scale_decoder(&positions)
-    }
-}
-
-/// The extent (as [`mesh_scale`] measures it) of a mesh's largest material range, on the vertices
-/// its triangles use: gltfpack converts each range to a primitive of its own and scales each
-/// primitive's `-si` limit by the largest primitive's extent over its own (`Plain::Primitives`).
-pub fn largest_range_scale(mesh: &Mesh) -> f32 {
-    let g = &mesh.geometry;
-    let ranges: Vec<&[u32]> = if g.submeshes.is_empty() {
-        vec![&g.indices[..]]
-    } else {
-        g.submeshes
-            .iter()
-            .filter_map(|s| {
-                let from = s.first_index as usize;
-                g.indices.get(from..from + s.index_count as usize)
-            })
-            .collect()
-    };
-    let mut seen = vec![false; g.positions.len()];
-    ranges
-        .into_iter()
-        .map(|range| {
-            let mut used: Vec<[f32; 3]> = Vec::new();
-            for &v in range {
-                if let Some(s) = seen.get_mut(v as usize).filter(|s| !**s) {
-                    *s = true;
-                    used.push(g.positions[v as usize].to_array());
-                }
-            }
-            for &v in range {
-                if let Some(s) = seen.get_mut(v as usize) {
-                    *s = false;
-                }
-            }
-            if used.is_empty() {
-                0.0
-            } else {
-                meshopt::simplify_scale_decoder(&used)
-            }
-        })
-        .fold(0.0f32, f32::max)
 }
 
 /// Wall times of one mesh's LOD work, in seconds: what `convert --timings` reports.

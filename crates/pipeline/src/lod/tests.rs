@@ -579,3 +579,87 @@ fn the_per_range_plain_build_gives_triangles_to_spare_back_to_the_range_that_los
         assert_eq!(ours, expected, "range {k} (the worst: {worst})");
     }
 }
+
+/// The per-range sloppy build (gltfpack's `-si -sa` on a glTF export's primitives): each range
+/// gltfpack's first pass alone, then, above its share, meshoptimizer's sloppy simplifier on the
+/// range's vertices alone within 10% of the range's extent; no triangle leaves its range.
+#[test]
+fn the_per_range_sloppy_build_clusters_each_range_alone_after_its_first_pass() {
+    let mut source = sphere(12, 24);
+    let cut = (2 * 24 * 3) as u32;
+    source.submeshes = vec![
+        Submesh {
+            first_index: 0,
+            index_count: cut,
+            material: "a".into(),
+        },
+        Submesh {
+            first_index: cut,
+            index_count: source.indices.len() as u32 - cut,
+            material: "b".into(),
+        },
+    ];
+    let whole = meshopt::simplify_scale_decoder(
+        &source
+            .positions
+            .iter()
+            .map(|p| p.to_array())
+            .collect::<Vec<_>>(),
+    );
+    let total = source.triangle_count();
+    // Few enough that gltfpack's 1% limit stops the first passes above their shares.
+    let target = total / 40;
+    let plains = step::Step::plains(&source, &LodTuning::default(), whole);
+    let built = plains[5].run(target, f32::MAX.sqrt(), &Anchors::default());
+    let (mut sloppy_ranges, mut first_total) = (0, 0);
+    for (k, range) in source.submeshes.iter().enumerate() {
+        let part = &source.indices
+            [range.first_index as usize..(range.first_index + range.index_count) as usize];
+        // The range's vertices in first-use order, as gltfpack reindexes a primitive.
+        let mut used: Vec<u32> = Vec::new();
+        for &v in part {
+            if !used.contains(&v) {
+                used.push(v);
+            }
+        }
+        let p: Vec<[f32; 3]> = used
+            .iter()
+            .map(|&v| source.positions[v as usize].to_array())
+            .collect();
+        let own = meshopt::simplify_scale_decoder(&p);
+        let share = (part.len() / 3 * target / total).max(1);
+        let first = range_passes(
+            &source,
+            range,
+            share,
+            &[(0.01 * whole / own, meshopt::SimplifyOptions::Prune)],
+        );
+        let first = &first[0].0;
+        first_total += first.len();
+        let expected: Vec<u32> = if first.len() > share * 3 {
+            sloppy_ranges += 1;
+            let local: Vec<u32> = first
+                .iter()
+                .filter_map(|v| used.iter().position(|u| u == v).map(|i| i as u32))
+                .collect();
+            meshopt::simplify_sloppy_decoder(&local, &p, share * 3, 0.1, None)
+                .into_iter()
+                .map(|v| used[v as usize])
+                .collect()
+        } else {
+            first.clone()
+        };
+        let sub = &built.submeshes[k];
+        let ours =
+            &built.indices[sub.first_index as usize..(sub.first_index + sub.index_count) as usize];
+        assert_eq!(ours, &expected[..], "range {k}");
+    }
+    // The fixture exercises the sloppy pass: the first passes stop above their shares, and the
+    // sloppy passes take more away.
+    assert!(sloppy_ranges > 0);
+    assert!(
+        built.indices.len() < first_total,
+        "{} of {first_total}",
+        built.indices.len()
+    );
+}

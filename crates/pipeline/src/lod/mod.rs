@@ -69,7 +69,7 @@ use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
 use sinew_scene::{GeneratedLod, Material, Mesh, NotBuiltLod, NotBuiltReason, Scene};
 use step::{first_use_remap, optimize_ranges, Anchors, Candidate, Step};
 pub use step::{LodTuning, PLAIN_WORK_BOUND};
-use weld::{flat_soup, is_flat_soup, split_shared, weld};
+use weld::{flat_soup, is_flat_soup, merge_uv_mirrors, split_shared, split_uv_mirrors, weld};
 
 /// A step's source under the test poses and under the reference poses (positions per pose).
 type PosedSource = (Vec<Vec<Vec3>>, Vec<Vec<Vec3>>);
@@ -399,7 +399,10 @@ fn build_lods_timed(
     // Without a texture reading the UVs, the plain builds are made from two sources: welded
     // without UVs, as gltfpack (which drops texture coordinates no material uses) builds, and with
     // them, their seams held: measured on the corpus, each is the closer on some meshes (docs/lod.md).
+    // Where UVs are kept, each source split as gltfpack splits a primitive's mirrored UVs
+    // (`split_uv_mirrors`), with the vertex count before the split and each copy's original.
     let mut plain_sources: Vec<Lod> = Vec::new();
+    let mut plain_copies: Vec<(usize, Vec<u32>)> = Vec::new();
     if let Some(input) = plain_input {
         let split = split_shared(input);
         let input = split.as_ref().unwrap_or(input);
@@ -410,9 +413,29 @@ fn build_lods_timed(
                 mesh: mesh.name.clone(),
                 problem: format!("after welding: {problem}"),
             })?;
-            plain_sources.push(welded);
+            let originals = welded.positions.len();
+            match split_uv_mirrors(&welded).filter(|_| !ignore_uvs) {
+                Some((split, copy_of)) => {
+                    plain_sources.push(split);
+                    plain_copies.push((originals, copy_of));
+                }
+                None => {
+                    plain_sources.push(welded);
+                    plain_copies.push((originals, Vec::new()));
+                }
+            }
         }
     }
+    // A plain build on its source's vertices before the mirror split.
+    let merged = |from: &Step, mut built: Candidate| {
+        let i = plain_sources
+            .iter()
+            .position(|s| std::ptr::eq(s, from.source()));
+        if let Some((originals, copy_of)) = i.and_then(|i| plain_copies.get(i)) {
+            merge_uv_mirrors(&mut built, *originals, copy_of);
+        }
+        built
+    };
     let plains: Vec<Step> = plain_sources
         .iter()
         .flat_map(|source| Step::plains(source, tuning, scene_scale))
@@ -625,7 +648,7 @@ fn build_lods_timed(
             let worst_pose = farthest_pose(&own_posed);
             for ((i, plain), once) in plains.iter().enumerate().zip(&plain_built) {
                 let other = once
-                    .get_or_init(|| plain.run(target, plain_budget, keep))
+                    .get_or_init(|| merged(plain, plain.run(target, plain_budget, keep)))
                     .clone();
                 if other.indices.len() > most {
                     continue;
@@ -691,7 +714,7 @@ fn build_lods_timed(
                     more.hard.sort_unstable();
                     more.hard.dedup();
                     let again = if from.is_plain() {
-                        from.run(target, plain_budget, &more)
+                        merged(from, from.run(target, plain_budget, &more))
                     } else {
                         from.run(target, budget, &more)
                     };

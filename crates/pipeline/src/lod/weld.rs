@@ -3,6 +3,7 @@
 //! flat-shaded triangle soup (every corner its own vertex) is welded without its normals and rebuilt
 //! flat after the step, so that meshoptimizer can collapse it at all.
 
+use super::Candidate;
 use sinew_core::glam;
 use sinew_core::Lod;
 
@@ -232,4 +233,108 @@ pub(super) fn flat_soup(lod: &Lod) -> Lod {
         }
     }
     out
+}
+
+/// gltfpack's `simplifyUvSplit`: a vertex used by triangles of both UV windings (on the line where
+/// a mirrored UV island meets its other half) gets a copy, appended after the source's vertices,
+/// which the triangles of negative winding use instead; the two halves then meet along a seam that
+/// meshoptimizer keeps (on a mirrored character, its plane of symmetry). The split source and, for
+/// each copy, its original; `None` when the source has no UVs or no such vertex.
+pub(super) fn split_uv_mirrors(lod: &Lod) -> Option<(Lod, Vec<u32>)> {
+    if lod.uvs.len() != lod.positions.len() {
+        return None;
+    }
+    let winding = |t: &[u32]| {
+        let [a, b, c] = [0, 1, 2].map(|k| lod.uvs[t[k] as usize]);
+        let area = (b - a).perp_dot(c - a);
+        if area > 0.0 {
+            1u8
+        } else if area < 0.0 {
+            2
+        } else {
+            0
+        }
+    };
+    let mut seen = vec![0u8; lod.positions.len()];
+    for t in lod.indices.chunks_exact(3) {
+        let w = winding(t);
+        for &v in t {
+            seen[v as usize] |= w;
+        }
+    }
+    let copy_of: Vec<u32> = (0..lod.positions.len() as u32)
+        .filter(|&v| seen[v as usize] == 3)
+        .collect();
+    if copy_of.is_empty() {
+        return None;
+    }
+    let n = lod.positions.len() as u32;
+    let mut copy = vec![u32::MAX; lod.positions.len()];
+    for (k, &v) in copy_of.iter().enumerate() {
+        copy[v as usize] = n + k as u32;
+    }
+    let mut out = lod.clone();
+    for t in out.indices.chunks_exact_mut(3) {
+        if winding(t) == 2 {
+            for v in t.iter_mut() {
+                if copy[*v as usize] != u32::MAX {
+                    *v = copy[*v as usize];
+                }
+            }
+        }
+    }
+    fn extend<T: Copy>(values: &mut Vec<T>, copy_of: &[u32]) {
+        if !values.is_empty() {
+            let more: Vec<T> = copy_of.iter().map(|&v| values[v as usize]).collect();
+            values.extend(more);
+        }
+    }
+    extend(&mut out.positions, &copy_of);
+    extend(&mut out.normals, &copy_of);
+    extend(&mut out.uvs, &copy_of);
+    extend(&mut out.joints, &copy_of);
+    extend(&mut out.weights, &copy_of);
+    Some((out, copy_of))
+}
+
+/// A build of a [`split_uv_mirrors`] source on the vertices before the split, as gltfpack remaps
+/// its indices after simplifying: each copy back to its original (`originals`: the vertex count
+/// before the split); a triangle left with two corners on one vertex is dropped.
+pub(super) fn merge_uv_mirrors(c: &mut Candidate, originals: usize, copy_of: &[u32]) {
+    if copy_of.is_empty() {
+        return;
+    }
+    let back = |v: u32| {
+        (v as usize)
+            .checked_sub(originals)
+            .and_then(|k| copy_of.get(k))
+            .copied()
+            .unwrap_or(v)
+    };
+    let ranges: Vec<(usize, usize)> = if c.submeshes.is_empty() {
+        vec![(0, c.indices.len())]
+    } else {
+        c.submeshes
+            .iter()
+            .map(|s| {
+                let from = s.first_index as usize;
+                (from, from + s.index_count as usize)
+            })
+            .collect()
+    };
+    let mut indices = Vec::with_capacity(c.indices.len());
+    for (k, (from, to)) in ranges.into_iter().enumerate() {
+        let start = indices.len();
+        for t in c.indices[from..to].chunks_exact(3) {
+            let [a, b, d] = [back(t[0]), back(t[1]), back(t[2])];
+            if a != b && b != d && a != d {
+                indices.extend([a, b, d]);
+            }
+        }
+        if let Some(s) = c.submeshes.get_mut(k) {
+            s.first_index = start as u32;
+            s.index_count = (indices.len() - start) as u32;
+        }
+    }
+    c.indices = indices;
 }

@@ -319,6 +319,60 @@ fn a_weld_without_uvs_merges_copies_that_differ_only_in_uv() {
     assert_eq!(opened.normals[3], Vec3::X);
 }
 
+/// gltfpack's UV mirror split: the vertices where triangles of both UV windings meet get copies,
+/// used by the triangles of negative winding; a build on the split source comes back onto the
+/// vertices before it, a triangle left with two corners on one vertex dropped.
+#[test]
+fn uv_mirror_seams_are_split_for_the_plain_builds_and_merged_back_after() {
+    let p = |x: f32, y: f32| Vec3::new(x, y, 0.0);
+    // Two triangles sharing the edge 0-2, the second's UVs mirrored across it.
+    let lod = Lod {
+        positions: vec![p(0.0, 0.0), p(1.0, 0.0), p(0.0, 1.0), p(-1.0, 0.0)],
+        normals: vec![Vec3::Z; 4],
+        uvs: vec![Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::X],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        ..Lod::default()
+    };
+    let (split, copy_of) = weld::split_uv_mirrors(&lod).expect("a mirror seam");
+    assert_eq!(copy_of, vec![0, 2]);
+    assert_eq!(split.positions.len(), 6);
+    assert_eq!(split.indices, vec![0, 1, 2, 4, 5, 3]);
+    assert_eq!(split.positions[4], lod.positions[0]);
+    assert_eq!(split.uvs[5], lod.uvs[2]);
+    // No mirrored triangle: nothing to split.
+    let one = Lod {
+        indices: vec![0, 1, 2],
+        ..lod.clone()
+    };
+    assert!(weld::split_uv_mirrors(&one).is_none());
+    let mut built = step::Candidate {
+        indices: vec![0, 1, 2, 4, 5, 3, 0, 4, 1],
+        submeshes: vec![
+            Submesh {
+                first_index: 0,
+                index_count: 6,
+                material: "a".into(),
+            },
+            Submesh {
+                first_index: 6,
+                index_count: 3,
+                material: "b".into(),
+            },
+        ],
+        error: 0.0,
+    };
+    weld::merge_uv_mirrors(&mut built, 4, &copy_of);
+    assert_eq!(built.indices, vec![0, 1, 2, 0, 2, 3]);
+    assert_eq!(
+        (
+            built.submeshes[0].index_count,
+            built.submeshes[1].first_index
+        ),
+        (6, 6)
+    );
+    assert_eq!(built.submeshes[1].index_count, 0);
+}
+
 /// A mesh's UVs are read when one of its ranges' materials has a texture, or names a material the
 /// scene does not have, or it has UVs and no ranges; not when every range's material has none.
 #[test]

@@ -432,7 +432,11 @@ fn build_lods_timed(
             .iter()
             .position(|s| std::ptr::eq(s, from.source()));
         if let Some((originals, copy_of)) = i.and_then(|i| plain_copies.get(i)) {
-            merge_uv_mirrors(&mut built, *originals, copy_of);
+            merge_uv_mirrors(
+                (&mut built.indices, &mut built.submeshes),
+                *originals,
+                copy_of,
+            );
         }
         built
     };

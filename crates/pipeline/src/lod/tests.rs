@@ -361,7 +361,7 @@ fn uv_mirror_seams_are_split_for_the_plain_builds_and_merged_back_after() {
         ],
         error: 0.0,
     };
-    weld::merge_uv_mirrors(&mut built, 4, &copy_of);
+    weld::merge_uv_mirrors((&mut built.indices, &mut built.submeshes), 4, &copy_of);
     assert_eq!(built.indices, vec![0, 1, 2, 0, 2, 3]);
     assert_eq!(
         (

@@ -3,9 +3,8 @@
 //! flat-shaded triangle soup (every corner its own vertex) is welded without its normals and rebuilt
 //! flat after the step, so that meshoptimizer can collapse it at all.
 
-use super::Candidate;
 use sinew_core::glam;
-use sinew_core::Lod;
+use sinew_core::{Lod, Submesh};
 
 /// True for a flat-shaded triangle soup: every vertex is used by exactly one triangle and the three
 /// corners of every triangle share one normal (a non-indexed source such as Fox.glb, whose importer
@@ -300,7 +299,11 @@ pub(super) fn split_uv_mirrors(lod: &Lod) -> Option<(Lod, Vec<u32>)> {
 /// A build of a [`split_uv_mirrors`] source on the vertices before the split, as gltfpack remaps
 /// its indices after simplifying: each copy back to its original (`originals`: the vertex count
 /// before the split); a triangle left with two corners on one vertex is dropped.
-pub(super) fn merge_uv_mirrors(c: &mut Candidate, originals: usize, copy_of: &[u32]) {
+pub(super) fn merge_uv_mirrors(
+    (indices_in, submeshes): (&mut Vec<u32>, &mut [Submesh]),
+    originals: usize,
+    copy_of: &[u32],
+) {
     if copy_of.is_empty() {
         return;
     }
@@ -311,10 +314,10 @@ pub(super) fn merge_uv_mirrors(c: &mut Candidate, originals: usize, copy_of: &[u
             .copied()
             .unwrap_or(v)
     };
-    let ranges: Vec<(usize, usize)> = if c.submeshes.is_empty() {
-        vec![(0, c.indices.len())]
+    let ranges: Vec<(usize, usize)> = if submeshes.is_empty() {
+        vec![(0, indices_in.len())]
     } else {
-        c.submeshes
+        submeshes
             .iter()
             .map(|s| {
                 let from = s.first_index as usize;
@@ -322,19 +325,19 @@ pub(super) fn merge_uv_mirrors(c: &mut Candidate, originals: usize, copy_of: &[u
             })
             .collect()
     };
-    let mut indices = Vec::with_capacity(c.indices.len());
+    let mut indices = Vec::with_capacity(indices_in.len());
     for (k, (from, to)) in ranges.into_iter().enumerate() {
         let start = indices.len();
-        for t in c.indices[from..to].chunks_exact(3) {
+        for t in indices_in[from..to].chunks_exact(3) {
             let [a, b, d] = [back(t[0]), back(t[1]), back(t[2])];
             if a != b && b != d && a != d {
                 indices.extend([a, b, d]);
             }
         }
-        if let Some(s) = c.submeshes.get_mut(k) {
+        if let Some(s) = submeshes.get_mut(k) {
             s.first_index = start as u32;
             s.index_count = (indices.len() - start) as u32;
         }
     }
-    c.indices = indices;
+    *indices_in = indices;
 }

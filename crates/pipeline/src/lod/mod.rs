@@ -440,9 +440,17 @@ fn build_lods_timed(
         }
         built
     };
+    // And from the second level on, sinew's own step from LOD 0 (the plain builds' first source,
+    // welded as the chain's steps are): a LOD 1 closest in itself can leave the next level worse
+    // off than a build from LOD 0 would be.
     let plains: Vec<Step> = plain_sources
         .iter()
         .flat_map(|source| Step::plains(source, tuning, scene_scale))
+        .chain(
+            plain_sources
+                .first()
+                .map(|s| Step::new(s, skeleton, tuning)),
+        )
         .collect();
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
     // (skinned meshes) and its vertices, centroids and edge midpoints at rest; then LOD 0's
@@ -577,7 +585,7 @@ fn build_lods_timed(
         let posed_of = |from: &Step| -> (&Vec<Vec<Vec3>>, &Vec<Vec<Vec3>>) {
             plain_sources
                 .iter()
-                .position(|s| from.is_plain() && std::ptr::eq(s, from.source()))
+                .position(|s| std::ptr::eq(s, from.source()))
                 .map_or((&step_posed, &step_reference), |i| {
                     (&plain_posed[i].0, &plain_posed[i].1)
                 })
@@ -651,6 +659,9 @@ fn build_lods_timed(
             let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
             let worst_pose = farthest_pose(&own_posed);
             for ((i, plain), once) in plains.iter().enumerate().zip(&plain_built) {
+                if k == 0 && !plain.is_plain() {
+                    continue;
+                }
                 let other = once
                     .get_or_init(|| merged(plain, plain.run(target, plain_budget, keep)))
                     .clone();
@@ -720,7 +731,7 @@ fn build_lods_timed(
                     let again = if from.is_plain() {
                         merged(from, from.run(target, plain_budget, &more))
                     } else {
-                        from.run(target, budget, &more)
+                        merged(from, from.run(target, budget, &more))
                     };
                     // No more triangles than the build it would replace (or the target's).
                     let fewer = best.0.indices.len().max(3 * (target + slack));

@@ -261,6 +261,20 @@ fn check_as_the_crate_reads(bytes: &[u8]) -> Result<(), CacheError> {
     let mut crate_pixel_bytes = 0u64;
     let mut crate_chunks = 0u64;
     for h in &meta.headers {
+        // A vertex cache must hold its values exactly (`verify` compares bits): the lossy
+        // compressions cannot, and the crate's B44 decoder panics on some malformed blocks (the
+        // fuzzer found one), so they are refused before any pixel is read.
+        if h.compression.may_loose_data() {
+            return Err(cache_error(
+                "exr",
+                "header",
+                8,
+                format!(
+                    "{} compression is lossy: a vertex cache needs exact values",
+                    h.compression
+                ),
+            ));
+        }
         let per_pixel: u64 = h
             .channels
             .list
@@ -385,6 +399,38 @@ mod tests {
         let mut tall = header(1, 100_000);
         tall.resize(4096, 0);
         assert!(walk(&tall).is_err());
+    }
+
+    /// A 4 x 4 RGB image of f16 samples written by the exr crate with `compression`.
+    fn rgb_file(compression: exr::prelude::Compression) -> Vec<u8> {
+        use exr::prelude::*;
+        let channels = SpecificChannels::rgb(|_: Vec2<usize>| {
+            (f16::from_f32(1.0), f16::from_f32(0.5), f16::from_f32(0.25))
+        });
+        let encoding = Encoding {
+            compression,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        };
+        let layer = Layer::new(Vec2(4, 4), LayerAttributes::default(), encoding, channels);
+        let mut out = std::io::Cursor::new(Vec::new());
+        Image::from_layer(layer)
+            .write()
+            .non_parallel()
+            .to_buffered(&mut out)
+            .expect("an EXR in memory");
+        out.into_inner()
+    }
+
+    #[test]
+    fn lossy_compressions_are_refused_before_any_pixel_is_read() {
+        use exr::prelude::Compression;
+        assert!(check_declared_size(&rgb_file(Compression::ZIP16)).is_ok());
+        assert!(check_declared_size(&rgb_file(Compression::PIZ)).is_ok());
+        for lossy in [Compression::B44, Compression::B44A, Compression::PXR24] {
+            let e = check_declared_size(&rgb_file(lossy)).unwrap_err();
+            assert!(e.message.contains("lossy"), "{lossy}: {e}");
+        }
     }
 
     #[test]

@@ -311,10 +311,15 @@ pub fn mesh_scale(mesh: &Mesh) -> f32 {
         .iter()
         .map(|p| p.to_array())
         .collect();
-    if positions.is_empty() {
+    extent(&positions)
+}
+
+/// meshoptimizer's extent of `points` (0 for none).
+fn extent(points: &[[f32; 3]]) -> f32 {
+    if points.is_empty() {
         0.0
     } else {
-        meshopt::simplify_scale_decoder(&positions)
+        meshopt::simplify_scale_decoder(points)
     }
 }
 
@@ -350,11 +355,7 @@ pub fn largest_range_scale(mesh: &Mesh) -> f32 {
                     *s = false;
                 }
             }
-            if used.is_empty() {
-                0.0
-            } else {
-                meshopt::simplify_scale_decoder(&used)
-            }
+            extent(&used)
         })
         .fold(0.0f32, f32::max)
 }

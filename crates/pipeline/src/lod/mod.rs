@@ -400,9 +400,9 @@ fn build_lods_timed(
     // without UVs, as gltfpack (which drops texture coordinates no material uses) builds, and with
     // them, their seams held: measured on the corpus, each is the closer on some meshes (docs/lod.md).
     // Where UVs are kept, each source split as gltfpack splits a primitive's mirrored UVs
-    // (`split_uv_mirrors`), with the vertex count before the split and each copy's original.
+    // (`split_uv_mirrors`), with each copy's original.
     let mut plain_sources: Vec<Lod> = Vec::new();
-    let mut plain_copies: Vec<(usize, Vec<u32>)> = Vec::new();
+    let mut plain_copies: Vec<Vec<u32>> = Vec::new();
     if let Some(input) = plain_input {
         let split = split_shared(input);
         let input = split.as_ref().unwrap_or(input);
@@ -413,17 +413,12 @@ fn build_lods_timed(
                 mesh: mesh.name.clone(),
                 problem: format!("after welding: {problem}"),
             })?;
-            let originals = welded.positions.len();
-            match split_uv_mirrors(&welded).filter(|_| !ignore_uvs) {
-                Some((split, copy_of)) => {
-                    plain_sources.push(split);
-                    plain_copies.push((originals, copy_of));
-                }
-                None => {
-                    plain_sources.push(welded);
-                    plain_copies.push((originals, Vec::new()));
-                }
-            }
+            let (source, copy_of) = match split_uv_mirrors(&welded).filter(|_| !ignore_uvs) {
+                Some(split) => split,
+                None => (welded, Vec::new()),
+            };
+            plain_sources.push(source);
+            plain_copies.push(copy_of);
         }
     }
     // A plain build on its source's vertices before the mirror split.
@@ -431,10 +426,11 @@ fn build_lods_timed(
         let i = plain_sources
             .iter()
             .position(|s| std::ptr::eq(s, from.source()));
-        if let Some((originals, copy_of)) = i.and_then(|i| plain_copies.get(i)) {
+        if let Some(copy_of) = i.and_then(|i| plain_copies.get(i)) {
+            let vertex_count = from.source().positions.len();
             merge_uv_mirrors(
                 (&mut built.indices, &mut built.submeshes),
-                *originals,
+                vertex_count,
                 copy_of,
             );
         }
@@ -728,11 +724,12 @@ fn build_lods_timed(
                     more.hard.extend(repair_locks(source, &far));
                     more.hard.sort_unstable();
                     more.hard.dedup();
-                    let again = if from.is_plain() {
-                        merged(from, from.run(target, plain_budget, &more))
+                    let limit_of = if from.is_plain() {
+                        plain_budget
                     } else {
-                        merged(from, from.run(target, budget, &more))
+                        budget
                     };
+                    let again = merged(from, from.run(target, limit_of, &more));
                     // No more triangles than the build it would replace (or the target's).
                     let fewer = best.0.indices.len().max(3 * (target + slack));
                     if again.indices.len() <= fewer {

@@ -361,7 +361,7 @@ fn uv_mirror_seams_are_split_for_the_plain_builds_and_merged_back_after() {
         ],
         error: 0.0,
     };
-    weld::merge_uv_mirrors((&mut built.indices, &mut built.submeshes), 4, &copy_of);
+    weld::merge_uv_mirrors((&mut built.indices, &mut built.submeshes), 6, &copy_of);
     assert_eq!(built.indices, vec![0, 1, 2, 0, 2, 3]);
     assert_eq!(
         (
@@ -400,6 +400,25 @@ fn uvs_are_read_where_a_texture_may_read_them() {
     assert!(uvs_read(&mesh, &materials));
 }
 
+/// The bumpy sphere in two material ranges: a small cap (its first two rings) and the rest.
+fn capped_sphere() -> Lod {
+    let mut source = sphere(12, 24);
+    let cut = (2 * 24 * 3) as u32;
+    source.submeshes = vec![
+        Submesh {
+            first_index: 0,
+            index_count: cut,
+            material: "a".into(),
+        },
+        Submesh {
+            first_index: cut,
+            index_count: source.indices.len() as u32 - cut,
+            material: "b".into(),
+        },
+    ];
+    source
+}
+
 /// The plain build per material range (`Plain::Primitives`, gltfpack's `-si` on a glTF export's
 /// primitives): no triangle leaves its range, each range is meshoptimizer's result on that range's
 /// vertices alone, and its limit is 1% of the scene's largest range (gltfpack's default `-ss`
@@ -408,21 +427,7 @@ fn uvs_are_read_where_a_texture_may_read_them() {
 /// largest range is ten times this mesh's.
 #[test]
 fn the_per_range_plain_build_simplifies_each_range_alone_within_the_scaled_limit() {
-    let mut source = sphere(12, 24);
-    // A small cap (the first two rings) and the rest of the sphere.
-    let half = (2 * 24 * 3) as u32;
-    source.submeshes = vec![
-        Submesh {
-            first_index: 0,
-            index_count: half,
-            material: "a".into(),
-        },
-        Submesh {
-            first_index: half,
-            index_count: source.indices.len() as u32 - half,
-            material: "b".into(),
-        },
-    ];
+    let source = capped_sphere();
     let positions: Vec<[f32; 3]> = source.positions.iter().map(|p| p.to_array()).collect();
     let whole = meshopt::simplify_scale_decoder(&positions);
     let build = |scene_scale: f32, target: usize| {
@@ -559,20 +564,7 @@ fn range_passes(
 /// triangles than the target.
 #[test]
 fn the_per_range_plain_build_gives_triangles_to_spare_back_to_the_range_that_lost_the_most() {
-    let mut source = sphere(12, 24);
-    let cut = (2 * 24 * 3) as u32;
-    source.submeshes = vec![
-        Submesh {
-            first_index: 0,
-            index_count: cut,
-            material: "a".into(),
-        },
-        Submesh {
-            first_index: cut,
-            index_count: source.indices.len() as u32 - cut,
-            material: "b".into(),
-        },
-    ];
+    let source = capped_sphere();
     let extent = |points: Vec<[f32; 3]>| meshopt::simplify_scale_decoder(&points);
     let whole = extent(source.positions.iter().map(|p| p.to_array()).collect());
     let total = source.triangle_count();
@@ -639,20 +631,7 @@ fn the_per_range_plain_build_gives_triangles_to_spare_back_to_the_range_that_los
 /// range's vertices alone within 10% of the range's extent; no triangle leaves its range.
 #[test]
 fn the_per_range_sloppy_build_clusters_each_range_alone_after_its_first_pass() {
-    let mut source = sphere(12, 24);
-    let cut = (2 * 24 * 3) as u32;
-    source.submeshes = vec![
-        Submesh {
-            first_index: 0,
-            index_count: cut,
-            material: "a".into(),
-        },
-        Submesh {
-            first_index: cut,
-            index_count: source.indices.len() as u32 - cut,
-            material: "b".into(),
-        },
-    ];
+    let source = capped_sphere();
     let whole = meshopt::simplify_scale_decoder(
         &source
             .positions

@@ -139,33 +139,10 @@ pub(super) fn weld(lod: &Lod, ignore_normals: bool, ignore_uvs: bool) -> Lod {
         let [a, b, c] = [0, 1, 2].map(|k| positions[remap[t[k] as usize] as usize]);
         a == b || b == c || a == c
     };
-    let mut indices: Vec<u32> = Vec::with_capacity(lod.indices.len());
     let mut submeshes = lod.submeshes.clone();
-    let ranges: Vec<(usize, usize)> = if lod.submeshes.is_empty() {
-        vec![(0, lod.indices.len())]
-    } else {
-        lod.submeshes
-            .iter()
-            .map(|s| {
-                (
-                    s.first_index as usize,
-                    (s.first_index + s.index_count) as usize,
-                )
-            })
-            .collect()
-    };
-    for (k, (from, to)) in ranges.into_iter().enumerate() {
-        let start = indices.len();
-        for t in lod.indices[from..to].chunks_exact(3) {
-            if !flat(t) {
-                indices.extend(t.iter().map(|&i| remap[i as usize]));
-            }
-        }
-        if let Some(sub) = submeshes.get_mut(k) {
-            sub.first_index = start as u32;
-            sub.index_count = (indices.len() - start) as u32;
-        }
-    }
+    let indices = rewrite_triangles(&lod.indices, &mut submeshes, |t| {
+        (!flat(t)).then(|| [0, 1, 2].map(|k| remap[t[k] as usize]))
+    });
     let normals = if ignore_normals {
         let mut acc = vec![glam::Vec3::ZERO; unique];
         for t in indices.chunks_exact(3) {
@@ -297,16 +274,17 @@ pub(super) fn split_uv_mirrors(lod: &Lod) -> Option<(Lod, Vec<u32>)> {
 }
 
 /// A build of a [`split_uv_mirrors`] source on the vertices before the split, as gltfpack remaps
-/// its indices after simplifying: each copy back to its original (`originals`: the vertex count
-/// before the split); a triangle left with two corners on one vertex is dropped.
+/// its indices after simplifying: each copy back to its original (`copy_of`, the copies being the
+/// last of `vertex_count` vertices); a triangle left with two corners on one vertex is dropped.
 pub(super) fn merge_uv_mirrors(
-    (indices_in, submeshes): (&mut Vec<u32>, &mut [Submesh]),
-    originals: usize,
+    (indices, submeshes): (&mut Vec<u32>, &mut [Submesh]),
+    vertex_count: usize,
     copy_of: &[u32],
 ) {
     if copy_of.is_empty() {
         return;
     }
+    let originals = vertex_count.saturating_sub(copy_of.len());
     let back = |v: u32| {
         (v as usize)
             .checked_sub(originals)
@@ -314,8 +292,21 @@ pub(super) fn merge_uv_mirrors(
             .copied()
             .unwrap_or(v)
     };
+    *indices = rewrite_triangles(indices, submeshes, |t| {
+        let [a, b, d] = [back(t[0]), back(t[1]), back(t[2])];
+        (a != b && b != d && a != d).then_some([a, b, d])
+    });
+}
+
+/// Each triangle of `indices` through `each` (`None` drops it), range by range of `submeshes`
+/// (all of `indices` when there are none), whose first indices and counts are set to the result's.
+fn rewrite_triangles(
+    indices: &[u32],
+    submeshes: &mut [Submesh],
+    mut each: impl FnMut(&[u32]) -> Option<[u32; 3]>,
+) -> Vec<u32> {
     let ranges: Vec<(usize, usize)> = if submeshes.is_empty() {
-        vec![(0, indices_in.len())]
+        vec![(0, indices.len())]
     } else {
         submeshes
             .iter()
@@ -325,19 +316,16 @@ pub(super) fn merge_uv_mirrors(
             })
             .collect()
     };
-    let mut indices = Vec::with_capacity(indices_in.len());
+    let mut out = Vec::with_capacity(indices.len());
     for (k, (from, to)) in ranges.into_iter().enumerate() {
-        let start = indices.len();
-        for t in indices_in[from..to].chunks_exact(3) {
-            let [a, b, d] = [back(t[0]), back(t[1]), back(t[2])];
-            if a != b && b != d && a != d {
-                indices.extend([a, b, d]);
-            }
+        let start = out.len();
+        for t in indices[from..to].chunks_exact(3) {
+            out.extend(each(t).into_iter().flatten());
         }
         if let Some(s) = submeshes.get_mut(k) {
             s.first_index = start as u32;
-            s.index_count = (indices.len() - start) as u32;
+            s.index_count = (out.len() - start) as u32;
         }
     }
-    *indices_in = indices;
+    out
 }

@@ -32,8 +32,8 @@ impl Step<'_> {
             0
         };
         // The first passes (each range within the limit), in the order of the ranges simplified,
-        // with each range's triangles and its extent over the mesh's, kept for the later builds: `by_range` asks for the same
-        // ranges with the same targets each time.
+        // with each range's triangles and its extent over the mesh's, kept for the later builds:
+        // `by_range` asks for the same ranges with the same targets each time.
         let mut firsts: Vec<(Vec<u32>, f32)> = Vec::new();
         let mut sizes: Vec<(usize, f32)> = Vec::new();
         // Each range's share rounded down, as gltfpack rounds each primitive's share of its ratio.
@@ -154,7 +154,7 @@ impl Step<'_> {
                 build(&Pass::Sloppy, &mut firsts, &mut sizes)
             };
         }
-        let (made, passes) = if first.indices.len() <= 3 * target_triangles {
+        let (made, mut passes) = if first.indices.len() <= 3 * target_triangles {
             (first.indices.len() / 3, firsts)
         } else {
             let mut deep = Vec::new();
@@ -186,7 +186,6 @@ impl Step<'_> {
             });
             spare = spare.saturating_sub(removed);
         }
-        let mut passes = passes;
         build(&Pass::Spend(counts), &mut passes, &mut sizes)
     }
 }

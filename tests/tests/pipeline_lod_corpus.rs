@@ -629,7 +629,8 @@ fn light_reductions_at_least_as_close_as_gltfpack_at_rest() {
 /// The default builds small meshes the plain ways too (`LodTuning::plain_work_bound`): where the
 /// work is within the bound the default chain is as close as gltfpack at its counts (the peers'
 /// build, `-si 0.5 -kn -noq`, or `-sa` for spider's tooth, at rest, % of the diagonal; without the
-/// plain builds 0.399, 0.390, 1.435 and 3.946), and above it the chain is the one without them.
+/// plain builds 0.399, 0.390, 1.435 and 3.946); above it a static mesh gets the positions-only
+/// build alone and a skinned one the chain without them.
 #[test]
 fn default_builds_small_meshes_the_plain_ways_too() {
     let within: [(&str, Option<&str>, usize, f32); 4] = [
@@ -657,7 +658,8 @@ fn default_builds_small_meshes_the_plain_ways_too() {
             "{file}: {tris} triangles: rest {r:.3}% vs gltfpack {rest}%"
         );
     }
-    // spot: 5,856 triangles, static: 46,848 units of work.
+    // spot: 5,856 triangles, static: 46,848 units of work, above the bound: the positions-only
+    // build alone runs, and is as close as gltfpack (the chain without it: 0.298%).
     let Some(scene) = load("obj/spot.obj") else {
         return;
     };
@@ -671,14 +673,29 @@ fn default_builds_small_meshes_the_plain_ways_too() {
         chain_at(&scene, &[2928]),
         chain_tuned_at(&scene, &[2928], &without),
     );
-    assert_eq!(a.meshes[0].lods[0].lod, b.meshes[0].lods[0].lod);
-    // The bound raised past spot's work, its plain builds are kept (closer: 0.298% without).
-    let above = LodTuning {
-        plain_work_bound: work,
-        ..LodTuning::default()
+    let ((reached, r), (_, r_without)) = (rest_at(&a), rest_at(&b));
+    assert_eq!(reached, 2928);
+    assert!(
+        r <= 0.276 + 0.001 && r < r_without,
+        "spot: {r:.3}% (without the plain builds {r_without:.3}%)"
+    );
+    // A skinned mesh above the bound (CesiumMan: 4,672 triangles under 2 test poses and 8
+    // reference poses, 84,096 units) gets none: the chain without them.
+    let Some(scene) = load("gltf/CesiumMan.glb") else {
+        return;
     };
-    let (_, r) = rest_at(&chain_tuned_at(&scene, &[2928], &above));
-    assert!(r <= 0.276 + 0.001, "spot: {r:.3}%");
+    let motion = scene_motion(&scene.clips, scene.skeleton.as_ref());
+    let work = plain_work(
+        &scene.meshes[0].geometry,
+        scene.skeleton.as_ref(),
+        &motion.poses,
+    );
+    assert_eq!(work, 4_672 * 18);
+    let (a, b) = (
+        chain_at(&scene, &[2336]),
+        chain_tuned_at(&scene, &[2336], &without),
+    );
+    assert_eq!(a.meshes[0].lods[0].lod, b.meshes[0].lods[0].lod);
 }
 
 /// `--effort max`'s reference poses: at most 16 in all, the same number from each clip (16 / 3 = 5

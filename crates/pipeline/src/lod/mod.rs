@@ -42,7 +42,9 @@
 //!   farther under poses sampled from the scene's clips ([`reference_poses`]) than the best
 //!   build's farthest distance at rest, in the test poses and in those poses (ties keep the
 //!   step's own build); then a posed repair build of the best one (LOD 0's farthest vertices in
-//!   the pose where it is farthest locked, kept on the same terms).
+//!   the pose where it is farthest locked, kept on the same terms);
+//! - on a static mesh above that bound, the positions-only plain build alone, compared at rest
+//!   (one simplification and one measurement: docs/lod.md, "Static meshes beyond the bound").
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -50,19 +52,21 @@
 //!
 //! meshoptimizer passes indices to C++ unchecked, so every buffer is validated before each call.
 
+mod buffers;
 mod measure;
 mod motion;
 mod step;
 mod weld;
 
 use crate::surface::{sample_points, used_vertices, TriangleGrid};
+pub use buffers::{limit_influences, validate_lod};
 use measure::{
     distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
     with_points, Measured,
 };
 pub use measure::{largest_range_scale, mesh_scale};
-use motion::plain_builds_of;
 pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, SceneMotion};
+use motion::{plain_builds_of, PlainSet};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
@@ -158,75 +162,6 @@ impl LodOptions {
     }
 }
 
-/// Checks that a LOD's buffers agree with each other: what meshoptimizer needs before any call.
-pub fn validate_lod(lod: &Lod) -> Result<(), String> {
-    let n = lod.positions.len();
-    if n > u32::MAX as usize {
-        return Err(format!("{n} vertices is more than 32-bit indices address"));
-    }
-    if lod.normals.len() != n {
-        return Err(format!("{} normals for {n} positions", lod.normals.len()));
-    }
-    if !lod.uvs.is_empty() && lod.uvs.len() != n {
-        return Err(format!("{} uvs for {n} positions", lod.uvs.len()));
-    }
-    if lod.joints.len() != lod.weights.len() || (!lod.joints.is_empty() && lod.joints.len() != n) {
-        return Err(format!(
-            "{} joint and {} weight sets for {n} positions",
-            lod.joints.len(),
-            lod.weights.len()
-        ));
-    }
-    if lod.indices.len() % 3 != 0 {
-        return Err(format!(
-            "{} indices is not a whole number of triangles",
-            lod.indices.len()
-        ));
-    }
-    if let Some(bad) = lod.indices.iter().find(|&&i| i as usize >= n) {
-        return Err(format!("index {bad} refers past the {n} vertices"));
-    }
-    if !lod.positions.iter().all(|p| p.is_finite()) {
-        return Err("non-finite position".into());
-    }
-    let mut next = 0u32;
-    for s in &lod.submeshes {
-        if s.first_index != next || s.index_count % 3 != 0 {
-            return Err("submeshes do not cover the indices in order, by whole triangles".into());
-        }
-        next = s
-            .first_index
-            .checked_add(s.index_count)
-            .ok_or("submesh range overflows")?;
-    }
-    if next as usize != lod.indices.len() && !lod.submeshes.is_empty() {
-        return Err("submeshes do not cover every index".into());
-    }
-    Ok(())
-}
-
-/// Keeps the `keep` largest influences of every vertex and renormalises them to sum to one.
-pub fn limit_influences(lod: &mut Lod, keep: usize) {
-    for (j, w) in lod.joints.iter_mut().zip(&mut lod.weights) {
-        let mut order: [usize; MAX_INFLUENCES] = [0, 1, 2, 3];
-        // Stable: equal weights keep slot order.
-        order.sort_by(|&a, &b| w[b].total_cmp(&w[a]));
-        let (mut nj, mut nw) = ([0u16; MAX_INFLUENCES], [0.0f32; MAX_INFLUENCES]);
-        for (slot, &k) in order.iter().take(keep).enumerate() {
-            nj[slot] = j[k];
-            nw[slot] = w[k];
-        }
-        let sum: f32 = nw.iter().sum();
-        if sum > 0.0 {
-            for x in &mut nw {
-                *x /= sum;
-            }
-            *j = nj;
-            *w = nw;
-        }
-    }
-}
-
 /// Optimises LOD 0 in place for the vertex cache and vertex fetch, keeping `source_vertex` in step.
 pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
     validate_lod(&mesh.geometry).map_err(|problem| LodError::BadMesh {
@@ -311,7 +246,8 @@ pub fn build_lods_tuned(
     );
     build_lods_timed(
         mesh,
-        plain[0].then_some(&mesh.geometry),
+        (plain[0] != PlainSet::Off).then_some(&mesh.geometry),
+        plain[0] == PlainSet::Positions,
         skeleton,
         true,
         tuning
@@ -331,6 +267,7 @@ pub fn build_lods_tuned(
 fn build_lods_timed(
     mesh: &Mesh,
     plain_input: Option<&Lod>,
+    positions_only: bool,
     skeleton: Option<&Skeleton>,
     uvs_read: bool,
     scene_scale: f32,
@@ -406,7 +343,12 @@ fn build_lods_timed(
     if let Some(input) = plain_input {
         let split = split_shared(input);
         let input = split.as_ref().unwrap_or(input);
-        let uvs_ignored: &[bool] = if uvs_read { &[false] } else { &[true, false] };
+        // The positions-only build alone: from the first source only (gltfpack's).
+        let uvs_ignored: &[bool] = match (uvs_read, positions_only) {
+            (true, _) => &[false],
+            (false, true) => &[true],
+            (false, false) => &[true, false],
+        };
         for &ignore_uvs in uvs_ignored {
             let welded = weld(input, plain_flat, ignore_uvs);
             validate_lod(&welded).map_err(|problem| LodError::BadMesh {
@@ -439,15 +381,23 @@ fn build_lods_timed(
     // And from the second level on, sinew's own step from LOD 0 (the plain builds' first source,
     // welded as the chain's steps are): a LOD 1 closest in itself can leave the next level worse
     // off than a build from LOD 0 would be.
-    let plains: Vec<Step> = plain_sources
-        .iter()
-        .flat_map(|source| Step::plains(source, tuning, scene_scale))
-        .chain(
-            plain_sources
-                .first()
-                .map(|s| Step::new(s, skeleton, tuning)),
-        )
-        .collect();
+    // (The positions-only build alone where that is all that runs: `PlainSet::Positions`.)
+    let plains: Vec<Step> = if positions_only {
+        plain_sources
+            .iter()
+            .map(|source| Step::positions_plain(source, tuning))
+            .collect()
+    } else {
+        plain_sources
+            .iter()
+            .flat_map(|source| Step::plains(source, tuning, scene_scale))
+            .chain(
+                plain_sources
+                    .first()
+                    .map(|s| Step::new(s, skeleton, tuning)),
+            )
+            .collect()
+    };
     // What a step's builds are compared by: LOD 0's distinct vertices under the test poses
     // (skinned meshes) and its vertices, centroids and edge midpoints at rest; then LOD 0's
     // vertices under the reference poses. The plain builds' source under the same poses.
@@ -954,10 +904,10 @@ pub fn generate_mesh_lods_timed(
             .fold(0.0f32, f32::max)
     });
     let one =
-        |(mesh, plain): (&mut Mesh, bool)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
+        |(mesh, plain): (&mut Mesh, PlainSet)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
             let started = std::time::Instant::now();
             // The geometry as it came, before the vertex-cache order: the plain build starts from it.
-            let plain_input = plain.then(|| mesh.geometry.clone());
+            let plain_input = (plain != PlainSet::Off).then(|| mesh.geometry.clone());
             optimize_base(mesh)?;
             let mut times = MeshLodTimes {
                 optimize: started.elapsed().as_secs_f64(),
@@ -966,6 +916,7 @@ pub fn generate_mesh_lods_timed(
             let chain = build_lods_timed(
                 mesh,
                 plain_input.as_ref(),
+                plain == PlainSet::Positions,
                 skeleton,
                 options.keep_uv_seams || uvs_read(mesh, materials),
                 scene_scale,

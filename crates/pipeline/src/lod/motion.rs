@@ -4,7 +4,8 @@
 //! The plain builds cost 4.0-5.3x the chain's work. They run on every mesh with
 //! `LodTuning::plain_candidate` (`convert --effort max`); otherwise on a mesh whose work
 //! ([`plain_work`]) is within `LodTuning::plain_work_bound`, and beyond it while the meshes' work
-//! fits in the share the file's clips allow ([`SceneMotion`]; docs/lod.md, "Cost").
+//! fits in the share the file's clips allow ([`SceneMotion`]; docs/lod.md, "Cost"). A static mesh
+//! beyond both gets the positions-only build alone ([`PlainSet::Positions`]).
 
 use super::step::LodTuning;
 use sinew_core::{ClipBinding, Lod, Sampler, Skeleton, Transform};
@@ -29,17 +30,31 @@ pub fn plain_work(lod: &Lod, skeleton: Option<&Skeleton>, reference: &[Vec<Trans
 /// "Cost").
 const PLAIN_REST_WORK: usize = 8;
 
-/// Per mesh, whether its LOD steps are also built the plain ways: on every mesh with
+/// Which plain builds ([`super::step::Plain`]) a mesh's LOD steps get beside the step's own build.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum PlainSet {
+    /// None: the step's own build alone.
+    Off,
+    /// The positions-only build alone, measured at rest: a static mesh beyond the bound, where
+    /// that build is one simplification and one measurement (docs/lod.md, "Cost").
+    Positions,
+    /// All six, the step from LOD 0 and the posed repair build.
+    All,
+}
+
+/// Per mesh, which plain builds its LOD steps get: all of them on every mesh with
 /// [`LodTuning::plain_candidate`]; otherwise where its [`plain_work`] is within
 /// [`LodTuning::plain_work_bound`], and beyond it while the meshes' work (in mesh order) fits in
 /// the scene's clip share (`motion.joint_keys / CLIP_KEYS_PER_PLAIN_WORK`): where the file's clips
-/// are large, the plain builds are a small part of the convert (docs/lod.md, "Cost").
+/// are large, the plain builds are a small part of the convert (docs/lod.md, "Cost"). A static
+/// mesh beyond both gets the positions-only build (its comparison needs no pose); a skinned one
+/// none. A bound of 0: none on any mesh.
 pub(super) fn plain_builds_of(
     meshes: &[Mesh],
     skeleton: Option<&Skeleton>,
     tuning: &LodTuning,
     motion: &SceneMotion,
-) -> Vec<bool> {
+) -> Vec<PlainSet> {
     let mut share = if tuning.plain_work_bound == 0 {
         0
     } else {
@@ -50,13 +65,18 @@ pub(super) fn plain_builds_of(
         .map(|m| {
             let work = plain_work(&m.geometry, skeleton, &motion.poses);
             if tuning.plain_candidate || work <= tuning.plain_work_bound {
-                return true;
+                return PlainSet::All;
             }
-            let fits = work <= share;
-            if fits {
+            if work <= share {
                 share -= work;
+                return PlainSet::All;
             }
-            fits
+            let posed = work != plain_work(&m.geometry, None, &[]);
+            if tuning.plain_work_bound == 0 || posed {
+                PlainSet::Off
+            } else {
+                PlainSet::Positions
+            }
         })
         .collect()
 }

@@ -53,7 +53,8 @@ pub struct LodTuning {
     pub plain_candidate: bool,
     /// Without `plain_candidate`, the plain builds still run on a mesh whose comparison work
     /// ([`super::plain_work`]) is at most this: where they cost little in absolute terms
-    /// (docs/lod.md, "Cost"). 0: never.
+    /// (docs/lod.md, "Cost"); a static mesh above it gets the positions-only build alone.
+    /// 0: never, on any mesh.
     pub plain_work_bound: usize,
     /// The extent (meshoptimizer's: its vertices' largest box side) of the scene's largest
     /// material range ([`super::largest_range_scale`]), which gltfpack's per-range limit is scaled
@@ -554,6 +555,12 @@ impl<'a> Step<'a> {
             primitives,
             primitives_sloppy,
         ]
+    }
+
+    /// The positions-only plain build of `source` alone ([`Plain::Positions`]): what a static mesh
+    /// beyond the plain builds' work bound gets (`super::motion::PlainSet::Positions`).
+    pub(super) fn positions_plain(source: &'a Lod, tuning: &LodTuning) -> Self {
+        Step::plain(source, tuning, Plain::Positions)
     }
 
     /// A plain build of this step's source of another kind, with this step's positions, material

@@ -124,9 +124,11 @@ fn static_mesh(tris: usize) -> Mesh {
 }
 
 /// Meshes within the bound always have the plain builds; beyond it, in mesh order, while their
-/// work fits in the clips' share (one unit per two joint-keys); with the bound 0, none do.
+/// work fits in the clips' share (one unit per two joint-keys); a static mesh beyond both has the
+/// positions-only build, a skinned one none; with the bound 0, no mesh has any.
 #[test]
 fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
+    use PlainSet::{All, Off, Positions};
     // Static: 8 units per triangle. 1,250 triangles: 10,000 units, the bound itself.
     let meshes: Vec<Mesh> = [1_250, 1_500, 2_000, 1_251, 100]
         .into_iter()
@@ -145,12 +147,12 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
         };
         plain_builds_of(&meshes, None, &tuning, &motion)
     };
-    assert_eq!(with_keys(0), [true, false, false, false, true]);
+    assert_eq!(with_keys(0), [All, Positions, Positions, Positions, All]);
     // A share of 12,000 units: the 1,500-triangle mesh takes all of it.
-    assert_eq!(with_keys(24_000), [true, true, false, false, true]);
+    assert_eq!(with_keys(24_000), [All, All, Positions, Positions, All]);
     // 22,015 units: 12,000, then 16,000 does not fit, 10,008 does.
-    assert_eq!(with_keys(44_030), [true, true, false, true, true]);
-    assert_eq!(with_keys(2 * 38_008), [true, true, true, true, true]);
+    assert_eq!(with_keys(44_030), [All, All, Positions, All, All]);
+    assert_eq!(with_keys(2 * 38_008), [All; 5]);
     let none = LodTuning {
         plain_work_bound: 0,
         ..LodTuning::default()
@@ -159,14 +161,42 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
         poses: Vec::new(),
         joint_keys: 1_000_000,
     };
-    assert_eq!(plain_builds_of(&meshes, None, &none, &motion), [false; 5]);
+    assert_eq!(plain_builds_of(&meshes, None, &none, &motion), [Off; 5]);
     let every = LodTuning {
         plain_candidate: true,
         ..none
     };
     assert_eq!(
         plain_builds_of(&meshes, None, &every, &SceneMotion::default()),
-        [true; 5]
+        [All; 5]
+    );
+    // Skinned to a skeleton (the two test poses: 10 units per triangle): 1,000 triangles are
+    // within the bound, 1,001 are not and get no plain build; without the skeleton they are
+    // static (8,008 units, within it).
+    let skinned = |tris: usize| {
+        let mut m = static_mesh(tris);
+        let n = m.geometry.positions.len();
+        m.geometry.joints = vec![[0; 4]; n];
+        m.geometry.weights = vec![[1.0, 0.0, 0.0, 0.0]; n];
+        m
+    };
+    let skeleton = Skeleton::new(
+        vec!["root".into()],
+        vec![None],
+        vec![Transform::IDENTITY],
+        vec![sinew_core::glam::Mat4::IDENTITY],
+    )
+    .unwrap();
+    let meshes = [skinned(1_000), skinned(1_001)];
+    assert!(meshes[1].geometry.is_skinned());
+    let no_clips = SceneMotion::default();
+    assert_eq!(
+        plain_builds_of(&meshes, Some(&skeleton), &tuning, &no_clips),
+        [All, Off]
+    );
+    assert_eq!(
+        plain_builds_of(&meshes, None, &tuning, &no_clips),
+        [All, All]
     );
 }
 

@@ -301,11 +301,14 @@ fn outputs_are_byte_identical_across_runs_and_thread_counts() {
 }
 
 /// One file, its clips compressed in parallel inside the process (clips, candidate layouts,
-/// refinements): the same bytes with one rayon thread as with two and three, at every `--effort`.
+/// refinements) and its LOD steps' plain builds made beside their own builds (all of them on the
+/// Biped fixture, the positions-only one on jeep1's static mesh): the same bytes with one rayon
+/// thread as with two and three, at every `--effort`.
 #[test]
 fn single_file_convert_is_byte_identical_at_any_rayon_thread_count() {
     let mut inputs = vec![biped()];
     inputs.extend(sinew_testdata::corpus_file("gltf/Fox.glb"));
+    inputs.extend(sinew_testdata::corpus_file("ms3d/jeep1.ms3d"));
     let dir = tempfile::tempdir().unwrap();
     for input in &inputs {
         for effort in ["fast", "default", "max"] {

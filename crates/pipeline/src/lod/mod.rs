@@ -581,10 +581,29 @@ fn build_lods_timed(
         // build was kept, if any.
         // Each plain build of this level, once: they read only `keep.hard` of the anchors (the
         // retry with UV seams open below differs in nothing else), so the retry reuses them.
-        let plain_built: Vec<std::cell::OnceCell<Candidate>> =
-            plains.iter().map(|_| std::cell::OnceCell::new()).collect();
+        let plain_built: Vec<std::sync::OnceLock<Candidate>> =
+            plains.iter().map(|_| std::sync::OnceLock::new()).collect();
+        // A plain build of this level (`i`, of `plains`), made once.
+        let plain_build = |i: usize, keep: &Anchors| -> &Candidate {
+            plain_built[i].get_or_init(|| {
+                let plain = &plains[i];
+                merged(plain, plain.run(target, plain_budget, keep))
+            })
+        };
         let build = |keep: &Anchors| {
-            let (built, m) = build_current(keep);
+            // The plain builds are made beside the step's own build (on another core when one
+            // is free: meshoptimizer runs on one); in order, so that those sharing a first pass
+            // find it (`FirstPasses`). Each is what it would be made alone.
+            let ((built, m), ()) = rayon::join(
+                || build_current(keep),
+                || {
+                    for (i, plain) in plains.iter().enumerate() {
+                        if k > 0 || plain.is_plain() {
+                            plain_build(i, keep);
+                        }
+                    }
+                },
+            );
             let most = built.indices.len().max(3 * (target + slack));
             let mut best = (built, m, None);
             if plains.is_empty() {
@@ -604,13 +623,11 @@ fn build_lods_timed(
             }
             let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
             let worst_pose = farthest_pose(&own_posed);
-            for ((i, plain), once) in plains.iter().enumerate().zip(&plain_built) {
+            for (i, plain) in plains.iter().enumerate() {
                 if k == 0 && !plain.is_plain() {
                     continue;
                 }
-                let other = once
-                    .get_or_init(|| merged(plain, plain.run(target, plain_budget, keep)))
-                    .clone();
+                let other = plain_build(i, keep).clone();
                 if other.indices.len() > most {
                     continue;
                 }

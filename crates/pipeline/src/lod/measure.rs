@@ -123,9 +123,14 @@ pub(super) fn measure(
     base_points: &[Vec3],
     base_grid: &TriangleGrid,
 ) -> Measured {
-    let distinct = distinct(&sample_points(positions, indices));
-    let added = farthest(&distinct, base_grid, 0.0, f32::INFINITY).unwrap_or(f32::INFINITY);
-    let grid = TriangleGrid::new(positions, indices);
+    // The build's grid is made beside the first half of the measurement (it does not depend on it).
+    let (added, grid) = rayon::join(
+        || {
+            let distinct = distinct(&sample_points(positions, indices));
+            farthest(&distinct, base_grid, 0.0, f32::INFINITY).unwrap_or(f32::INFINITY)
+        },
+        || TriangleGrid::new(positions, indices),
+    );
     let mut hints = vec![u32::MAX; base_points.len()];
     let lost = farthest_hinted(base_points, &grid, added, f32::INFINITY, &mut hints)
         .unwrap_or(f32::INFINITY);

@@ -262,7 +262,8 @@ pub fn build_lods_tuned(
 
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
 /// repair and measurement; a level not built counts when simplification was tried) onto
-/// `seconds`.
+/// `seconds`. `plain_input`: LOD 0 as it came in, where plain builds run
+/// ([`motion::PlainSet`]); `positions_only`: only the positions-only one of them.
 #[allow(clippy::too_many_arguments)]
 fn build_lods_timed(
     mesh: &Mesh,

@@ -584,6 +584,9 @@ fn build_lods_timed(
         // retry with UV seams open below differs in nothing else), so the retry reuses them.
         let plain_built: Vec<std::sync::OnceLock<Candidate>> =
             plains.iter().map(|_| std::sync::OnceLock::new()).collect();
+        // Whether a build of `plains` is a candidate at this level: sinew's own step from LOD 0
+        // only from the second level on (at the first it is the step itself).
+        let candidate_here = |plain: &Step| k > 0 || plain.is_plain();
         // A plain build of this level (`i`, of `plains`), made once.
         let plain_build = |i: usize, keep: &Anchors| -> &Candidate {
             plain_built[i].get_or_init(|| {
@@ -599,7 +602,7 @@ fn build_lods_timed(
                 || build_current(keep),
                 || {
                     for (i, plain) in plains.iter().enumerate() {
-                        if k > 0 || plain.is_plain() {
+                        if candidate_here(plain) {
                             plain_build(i, keep);
                         }
                     }
@@ -625,7 +628,7 @@ fn build_lods_timed(
             let mut reference_limit = own_reference.iter().fold(0.0f32, |a, &b| a.max(b));
             let worst_pose = farthest_pose(&own_posed);
             for (i, plain) in plains.iter().enumerate() {
-                if k == 0 && !plain.is_plain() {
+                if !candidate_here(plain) {
                     continue;
                 }
                 let other = plain_build(i, keep).clone();

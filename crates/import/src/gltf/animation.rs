@@ -5,6 +5,7 @@ use super::document::{at, floats, Loaded};
 use super::skin::{decompose, Graph, Rig};
 use crate::ImportError;
 use glam::{Mat4, Quat, Vec3};
+use rayon::prelude::*;
 use sinew_core::{Curve, TrackCurves, Transform};
 use sinew_scene::{Diagnostic, Scene, SceneClip};
 use std::collections::{BTreeMap, HashSet};
@@ -15,6 +16,44 @@ pub(super) enum Prop {
     T,
     R,
     S,
+}
+
+/// Animations with fewer keys than this (all channels) build their curves on the calling thread:
+/// handing a few microseconds of work to the pool costs more than it saves.
+const PARALLEL_KEYS: usize = 512;
+
+/// One channel's keys, read and checked, before its curve is built.
+struct Channel {
+    node: usize,
+    prop: Prop,
+    interp: Interp,
+    times: Vec<f32>,
+    /// The sampler's output, flat (4 floats per rotation key, 3 per translation or scale key;
+    /// three values per key with cubic interpolation).
+    values: Vec<f32>,
+}
+
+/// A channel's curve and its largest measured deviation from the glTF interpolation.
+enum Built {
+    Rotation(Curve<Quat>, f32),
+    Vector(Curve<Vec3>, f32),
+}
+
+impl Channel {
+    fn curve(&self) -> Built {
+        match self.prop {
+            Prop::R => {
+                let q: Vec<Quat> = self.values.chunks_exact(4).map(Quat::from_slice).collect();
+                let (c, e) = super::anim::rotation_curve(&self.times, &q, self.interp);
+                Built::Rotation(c, e)
+            }
+            Prop::T | Prop::S => {
+                let v: Vec<Vec3> = self.values.chunks_exact(3).map(Vec3::from_slice).collect();
+                let (c, e) = super::anim::vector_curve(&self.times, &v, self.interp);
+                Built::Vector(c, e)
+            }
+        }
+    }
 }
 
 /// Value of a linear curve at `t`, clamped at the ends (the runtime's rule).
@@ -65,6 +104,8 @@ pub(super) fn import_animations(
         let mut skipped_weights = 0;
         let mut not_joint: Vec<String> = Vec::new();
         let mut seen: HashSet<(usize, Prop)> = HashSet::new();
+        let mut channels: Vec<Channel> = Vec::new();
+        let mut keys = 0usize;
         for ch in a.channels() {
             let ci = ch.index();
             let cp = format!("animations[{ai}].channels[{ci}]");
@@ -143,22 +184,39 @@ pub(super) fn import_animations(
                     ),
                 ));
             }
-            let track = per_node.entry(node).or_insert_with(|| TrackCurves {
+            per_node.entry(node).or_insert_with(|| TrackCurves {
                 joint: g.names[node].clone(),
                 ..TrackCurves::default()
             });
-            match prop {
-                Prop::R => {
-                    let q: Vec<Quat> = out.chunks_exact(4).map(Quat::from_slice).collect();
-                    let (c, e) = super::anim::rotation_curve(&times, &q, interp);
+            keys += times.len();
+            channels.push(Channel {
+                node,
+                prop,
+                interp,
+                times,
+                values: out,
+            });
+        }
+        // Each channel's curve is its own (a rotation's densification is most of a long clip's
+        // import): built side by side when there are enough keys, then put in place in channel
+        // order, so the clip is the same at any thread count.
+        let built: Vec<Built> = if keys >= PARALLEL_KEYS {
+            channels.par_iter().map(Channel::curve).collect()
+        } else {
+            channels.iter().map(Channel::curve).collect()
+        };
+        for (ch, curve) in channels.iter().zip(built) {
+            let Some(track) = per_node.get_mut(&ch.node) else {
+                continue;
+            };
+            match curve {
+                Built::Rotation(c, e) => {
                     worst_rot = worst_rot.max(e);
                     track.rotation = c;
                 }
-                Prop::T | Prop::S => {
-                    let v: Vec<Vec3> = out.chunks_exact(3).map(Vec3::from_slice).collect();
-                    let (c, e) = super::anim::vector_curve(&times, &v, interp);
+                Built::Vector(c, e) => {
                     worst_vec = worst_vec.max(e);
-                    if prop == Prop::T {
+                    if ch.prop == Prop::T {
                         track.translation = c;
                     } else {
                         track.scale = c;

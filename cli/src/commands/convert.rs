@@ -590,6 +590,11 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     });
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
+        .start_handler(|_| {
+            if std::env::var_os("SINEW_NO_WARM_HEAP").is_none() {
+                sinew_pipeline::warm_thread_heap();
+            }
+        })
         .build()
         .map_err(|e| anyhow!("--jobs: cannot start worker threads: {e}"))?;
     // Largest inputs first (by file size), each worker taking the next job when it is free, so one

@@ -7,7 +7,8 @@
 //! clip the median and fastest time in milliseconds, the joints x keys, the compressed bytes and the
 //! max error. `SINEW_EFFORT=fast|max` picks another effort, `SINEW_SETTING=default` the default
 //! (relative) tolerance. Like the `sinew` binary, it starts with [`sinew_pipeline::warm_heap`]
-//! unless `SINEW_NO_WARM_HEAP` is set. The time is the encoder's on the pool thread that runs it
+//! and warms each pool thread's heap ([`sinew_pipeline::warm_thread_heap`]) unless
+//! `SINEW_NO_WARM_HEAP` is set. The time is the encoder's on the pool thread that runs it
 //! (as `convert --timings` reports it and ACL its compression time); `SINEW_TIME_HANDOFF=1` times
 //! the hand-off to the pool and back too, as this example did until session 19.
 
@@ -29,8 +30,14 @@ fn main() {
         .ok()
         .and_then(|t| t.parse().ok())
         .unwrap_or(1);
+    let warm = std::env::var_os("SINEW_NO_WARM_HEAP").is_none();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
+        .start_handler(move |_| {
+            if warm {
+                sinew_pipeline::warm_thread_heap();
+            }
+        })
         .build()
         .unwrap();
     let mut options = if std::env::var("SINEW_SETTING").as_deref() == Ok("default") {

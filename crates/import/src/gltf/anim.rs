@@ -603,6 +603,15 @@ mod tests {
             let angle = [0.001f32, 0.01, 0.05, 0.3, 1.0, 2.5][case % 6] * (1.0 + rnd() * 0.5);
             let axis = Vec3::new(rnd(), rnd(), rnd() + 2.0).normalize();
             let q1 = (Quat::from_axis_angle(axis, angle) * q0).normalize();
+            // Half the cases with keys as long as `unit` keeps them (within 1e-6 of unit length).
+            let (q0, q1) = if (case / 6) % 2 == 1 {
+                (
+                    unit(q0 * (1.0 + 9.9e-7 * rnd())),
+                    unit(q1 * (1.0 + 9.9e-7 * rnd())),
+                )
+            } else {
+                (q0, q1)
+            };
             let slerp = Slerp::new(q0, q1);
             let span = RotationSpan::Linear(Slerp::new(q0, q1));
             for pieces in [1usize, 2, 4, 8, 16, 32, 64, 128, 256] {

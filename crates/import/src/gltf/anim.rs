@@ -324,17 +324,66 @@ pub fn vector_curve(times: &[f32], values: &[Vec3], interp: Interp) -> (Curve<Ve
     (Curve::new(out_t, out_v), worst)
 }
 
+/// The unit key `k` of a rotation channel (the value, not a tangent, of a cubic one).
+fn rotation_key(values: &[Quat], interp: Interp, k: usize) -> Quat {
+    unit(match interp {
+        Interp::Cubic => values[3 * k + 1],
+        _ => values[k],
+    })
+}
+
+/// The glTF curve of a rotation channel between keys `k - 1` and `k` (`None` for STEP).
+fn rotation_span(times: &[f32], values: &[Quat], interp: Interp, k: usize) -> Option<RotationSpan> {
+    let (q0, q1) = (
+        rotation_key(values, interp, k - 1),
+        rotation_key(values, interp, k),
+    );
+    match interp {
+        Interp::Step => None,
+        Interp::Linear => Some(RotationSpan::Linear(Slerp::new(q0, q1))),
+        Interp::Cubic => Some(RotationSpan::Cubic {
+            q0,
+            q1,
+            r0: values[3 * (k - 1) + 1],
+            b0: values[3 * (k - 1) + 2],
+            r1: values[3 * k + 1],
+            a1: values[3 * k],
+            td: times[k] - times[k - 1],
+        }),
+    }
+}
+
+/// The error measured on a span over `pieces` pieces, their ends worked out at once (the
+/// parameter 2p / 2n is p / n bit for bit, so these are the ends a halving from one piece keeps).
+/// Below the most pieces it may stop at the first point above the tolerance.
+fn pieces_error(span: &RotationSpan, pieces: usize, ratios: &mut Vec<(f32, f32, f32)>) -> f32 {
+    let ends: Vec<Quat> = (0..=pieces)
+        .map(|p| span.at(p as f32 / pieces as f32))
+        .collect();
+    let above = (pieces < MAX_SUBDIVISIONS).then_some(ROTATION_TOLERANCE);
+    span.nlerp_error(pieces, &ends, above, ratios)
+}
+
 /// Converts a rotation channel. Values are normalised copies of the glTF quaternions (bit-exact when the
 /// glTF value is already unit length to within 1e-6). Returns the curve and the largest deviation (radians).
 pub fn rotation_curve(times: &[f32], values: &[Quat], interp: Interp) -> (Curve<Quat>, f32) {
+    rotation_curve_known(times, values, interp, 0.0)
+}
+
+/// [`rotation_curve`] given `known`, an error measured already on an interval of the same import
+/// as this function measures it ([`certain_interval_error`]; 0 for none): an interval whose first
+/// pieces certainly suffice and whose error cannot be above the larger of `known` and the largest
+/// measured here so far is not measured. The curve is the same; the error returned is the largest
+/// measured here, and the larger of it and `known` is the largest [`rotation_curve`] would
+/// report over both channels (the same bits).
+pub fn rotation_curve_known(
+    times: &[f32],
+    values: &[Quat],
+    interp: Interp,
+    known: f32,
+) -> (Curve<Quat>, f32) {
     let n = times.len();
-    let key = |k: usize| {
-        let q = match interp {
-            Interp::Cubic => values[3 * k + 1],
-            _ => values[k],
-        };
-        unit(q)
-    };
+    let key = |k: usize| rotation_key(values, interp, k);
     let mut out_t = Vec::with_capacity(n);
     let mut out_v = Vec::with_capacity(n);
     let mut worst = 0.0f32;
@@ -342,34 +391,20 @@ pub fn rotation_curve(times: &[f32], values: &[Quat], interp: Interp) -> (Curve<
     for k in 0..n {
         if k > 0 {
             let (t0, t1) = (times[k - 1], times[k]);
-            let (q0, q1) = (key(k - 1), key(k));
-            let span = match interp {
-                Interp::Step => {
-                    let tb = prev_float(t1);
-                    if tb > t0 {
-                        out_t.push(tb);
-                        out_v.push(q0);
-                    }
-                    None
+            if interp == Interp::Step {
+                let tb = prev_float(t1);
+                if tb > t0 {
+                    out_t.push(tb);
+                    out_v.push(key(k - 1));
                 }
-                Interp::Linear => Some(RotationSpan::Linear(Slerp::new(q0, q1))),
-                Interp::Cubic => Some(RotationSpan::Cubic {
-                    q0,
-                    q1,
-                    r0: values[3 * (k - 1) + 1],
-                    b0: values[3 * (k - 1) + 2],
-                    r1: values[3 * k + 1],
-                    a1: values[3 * k],
-                    td: t1 - t0,
-                }),
-            };
-            if let Some(span) = span {
+            }
+            if let Some(span) = rotation_span(times, values, interp, k) {
                 // Fewer pieces than the first that is not certainly too few would be measured
                 // too few: they are not measured. And where that many are certainly enough and
                 // their error cannot be the largest so far, it is not measured either: the curve
                 // and the largest error are those of measuring every level from one piece.
                 let (mut pieces, enough) = span.first_pieces();
-                if enough.is_some_and(|bound| bound <= worst) {
+                if enough.is_some_and(|bound| bound <= worst.max(known)) {
                     for (t, s) in inner_times(t0, t1, pieces) {
                         out_t.push(t);
                         out_v.push(span.at(s));
@@ -378,9 +413,6 @@ pub fn rotation_curve(times: &[f32], values: &[Quat], interp: Interp) -> (Curve<
                     out_v.push(key(k));
                     continue;
                 }
-                // The span at the ends of the pieces, kept from one halving to the next: the
-                // parameter 2p / 2n is p / n bit for bit (so also the ends of `pieces` pieces
-                // worked out at once).
                 let mut ends: Vec<Quat> = (0..=pieces)
                     .map(|p| span.at(p as f32 / pieces as f32))
                     .collect();
@@ -413,6 +445,44 @@ pub fn rotation_curve(times: &[f32], values: &[Quat], interp: Interp) -> (Curve<
         out_v.push(key(k));
     }
     (Curve::new(out_t, out_v), worst)
+}
+
+/// Of a rotation channel's intervals whose first pieces certainly suffice
+/// ([`RotationSpan::first_pieces`]), the one with the largest bound on its error: (the bound, the
+/// key it ends at). Without measuring: what an import measures first ([`certain_interval_error`])
+/// so that [`rotation_curve_known`] can leave out the intervals that cannot exceed it.
+pub fn largest_certain(times: &[f32], values: &[Quat], interp: Interp) -> Option<(f32, usize)> {
+    if interp != Interp::Linear {
+        return None;
+    }
+    (1..times.len())
+        .filter_map(|k| {
+            let span = rotation_span(times, values, interp, k)?;
+            span.first_pieces().1.map(|bound| (bound, k))
+        })
+        .fold(None, |best: Option<(f32, usize)>, (bound, k)| match best {
+            Some((b, _)) if b >= bound => best,
+            _ => Some((bound, k)),
+        })
+}
+
+/// The error [`rotation_curve`] measures on the interval ending at key `k` when its first pieces
+/// certainly suffice, as it measures it (`None` otherwise, or if the measurement is above the
+/// tolerance after all).
+pub fn certain_interval_error(
+    times: &[f32],
+    values: &[Quat],
+    interp: Interp,
+    k: usize,
+) -> Option<f32> {
+    if k == 0 || k >= times.len() {
+        return None;
+    }
+    let span = rotation_span(times, values, interp, k)?;
+    let (pieces, enough) = span.first_pieces();
+    enough?;
+    let e = pieces_error(&span, pieces, &mut Vec::new());
+    (e <= ROTATION_TOLERANCE).then_some(e)
 }
 
 /// The quaternion itself when it is unit length to within 1e-6, else normalised.
@@ -633,5 +703,79 @@ mod tests {
         }
         assert!(compared > 10_000, "{compared}");
         assert!(worst <= ROUNDING_MARGIN / 2.0, "{worst:e}");
+    }
+    #[test]
+    fn a_known_error_leaves_the_curves_and_the_largest_error_as_they_are() {
+        // What the glTF import does over an animation's channels: the interval with the largest
+        // bound among those certainly within the tolerance measured first, then every channel
+        // given that error. The same curves bit for bit, and the same largest error over the
+        // channels, as each channel converted alone.
+        let mut s = 0x1234_5678u32;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        };
+        let mut witnessed = 0;
+        for case in 0..40 {
+            // Four channels of fine and coarse steps (a capture's small turns and a keyed clip's).
+            let channels: Vec<(Vec<f32>, Vec<Quat>)> = (0..4)
+                .map(|c| {
+                    let n = 20 + (case + c) % 30;
+                    let times: Vec<f32> = (0..n).map(|k| k as f32 / 30.0).collect();
+                    // Every other case only steps that no interval needs more pieces for (its
+                    // largest error is then among the intervals that may be left out).
+                    let steps = if case % 2 == 0 {
+                        [0.002f32, 0.005, 0.01, 0.02]
+                    } else {
+                        [0.002, 0.02, 0.08, 0.6]
+                    };
+                    let step = steps[(case + c) % 4];
+                    let mut q = Quat::from_xyzw(rnd(), rnd(), rnd(), rnd()).normalize();
+                    let keys = (0..n)
+                        .map(|_| {
+                            let axis = Vec3::new(rnd(), rnd(), rnd() + 2.0).normalize();
+                            q = (Quat::from_axis_angle(axis, step * (1.0 + rnd() * 0.5)) * q)
+                                .normalize();
+                            q
+                        })
+                        .collect();
+                    (times, keys)
+                })
+                .collect();
+            let alone: Vec<(Curve<Quat>, f32)> = channels
+                .iter()
+                .map(|(t, v)| rotation_curve(t, v, Interp::Linear))
+                .collect();
+            let largest = alone.iter().fold(0.0f32, |m, c| m.max(c.1));
+            let witness = channels
+                .iter()
+                .enumerate()
+                .filter_map(|(i, (t, v))| {
+                    largest_certain(t, v, Interp::Linear).map(|(b, k)| (b, i, k))
+                })
+                .fold(None, |best: Option<(f32, usize, usize)>, c| match best {
+                    Some(b) if b.0 >= c.0 => best,
+                    _ => Some(c),
+                });
+            let known = witness.map_or(0.0, |(_, i, k)| {
+                let (t, v) = &channels[i];
+                certain_interval_error(t, v, Interp::Linear, k).unwrap_or(0.0)
+            });
+            witnessed += usize::from(known > 0.0);
+            let mut seeded = known;
+            for ((t, v), (curve, _)) in channels.iter().zip(&alone) {
+                let (c, e) = rotation_curve_known(t, v, Interp::Linear, known);
+                assert_eq!(c.times, curve.times, "case {case}");
+                let bits = |q: &[Quat]| -> Vec<[u32; 4]> {
+                    q.iter().map(|q| q.to_array().map(f32::to_bits)).collect()
+                };
+                assert_eq!(bits(&c.values), bits(&curve.values), "case {case}");
+                seeded = seeded.max(e);
+            }
+            assert_eq!(seeded.to_bits(), largest.to_bits(), "case {case}");
+        }
+        assert!(witnessed >= 30, "{witnessed}");
     }
 }

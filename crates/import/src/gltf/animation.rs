@@ -40,11 +40,27 @@ enum Built {
 }
 
 impl Channel {
-    fn curve(&self) -> Built {
+    /// The rotation keys (or cubic triples) of a rotation channel.
+    fn rotations(&self) -> Vec<Quat> {
+        self.values.chunks_exact(4).map(Quat::from_slice).collect()
+    }
+
+    /// Of a rotation channel, the interval with the largest bound on its error among those whose
+    /// first pieces certainly suffice, and that bound ([`super::anim::largest_certain`]).
+    fn largest_certain(&self) -> Option<(f32, usize)> {
+        if self.prop != Prop::R {
+            return None;
+        }
+        super::anim::largest_certain(&self.times, &self.rotations(), self.interp)
+    }
+
+    /// The channel's curve; `known`: a rotation error this import measured already
+    /// ([`super::anim::rotation_curve_known`]).
+    fn curve(&self, known: f32) -> Built {
         match self.prop {
             Prop::R => {
-                let q: Vec<Quat> = self.values.chunks_exact(4).map(Quat::from_slice).collect();
-                let (c, e) = super::anim::rotation_curve(&self.times, &q, self.interp);
+                let q = self.rotations();
+                let (c, e) = super::anim::rotation_curve_known(&self.times, &q, self.interp, known);
                 Built::Rotation(c, e)
             }
             Prop::T | Prop::S => {
@@ -200,10 +216,38 @@ pub(super) fn import_animations(
         // Each channel's curve is its own (a rotation's densification is most of a long clip's
         // import): built side by side when there are enough keys, then put in place in channel
         // order, so the clip is the same at any thread count.
-        let built: Vec<Built> = if keys >= PARALLEL_KEYS {
-            channels.par_iter().map(Channel::curve).collect()
+        // Most intervals of a fine capture need no added key and deviate far less than the
+        // largest deviation the import reports, yet measuring them was most of its cost: the
+        // interval with the largest bound among those certainly within the tolerance is measured
+        // first (it is one of them, so the reported largest deviation is at least its error), and
+        // each channel then leaves out the intervals that cannot exceed it or the largest so far.
+        let par = keys >= PARALLEL_KEYS;
+        let certain: Vec<Option<(f32, usize)>> = if par {
+            channels.par_iter().map(Channel::largest_certain).collect()
         } else {
-            channels.iter().map(Channel::curve).collect()
+            channels.iter().map(Channel::largest_certain).collect()
+        };
+        let witness = certain
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.map(|(bound, k)| (bound, i, k)))
+            .fold(None, |best: Option<(f32, usize, usize)>, c| match best {
+                Some(b) if b.0 >= c.0 => best,
+                _ => Some(c),
+            });
+        if let Some((_, i, k)) = witness {
+            let ch = &channels[i];
+            if let Some(e) =
+                super::anim::certain_interval_error(&ch.times, &ch.rotations(), ch.interp, k)
+            {
+                worst_rot = worst_rot.max(e);
+            }
+        }
+        let known = worst_rot;
+        let built: Vec<Built> = if par {
+            channels.par_iter().map(|c| c.curve(known)).collect()
+        } else {
+            channels.iter().map(|c| c.curve(known)).collect()
         };
         for (ch, curve) in channels.iter().zip(built) {
             let Some(track) = per_node.get_mut(&ch.node) else {

@@ -36,7 +36,7 @@ pub enum Status {
 pub fn main_entry() -> ExitCode {
     // Clap prints usage errors itself and exits 2 (0 for --help and --version).
     let args = cli::Cli::parse();
-    if std::env::var_os("SINEW_NO_WARM_HEAP").is_none() {
+    if sinew_pipeline::heap_warming() {
         // The global pool (a single input's work runs in it), each worker's heap warmed when it
         // starts, as a batch's own pool does (`convert`); after the arguments, so that `--help`
         // and `--version` start no thread. If it cannot be built here, rayon builds it on first

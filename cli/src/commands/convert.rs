@@ -591,7 +591,7 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.jobs.unwrap_or(0))
         .start_handler(|_| {
-            if std::env::var_os("SINEW_NO_WARM_HEAP").is_none() {
+            if sinew_pipeline::heap_warming() {
                 sinew_pipeline::warm_thread_heap();
             }
         })

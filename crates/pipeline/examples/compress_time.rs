@@ -20,7 +20,7 @@ use std::time::Instant;
 
 fn main() {
     // The process the `sinew` binary runs the encoder in.
-    if std::env::var_os("SINEW_NO_WARM_HEAP").is_none() {
+    if sinew_pipeline::heap_warming() {
         sinew_pipeline::warm_heap();
     }
     let mut args = std::env::args().skip(1);
@@ -30,7 +30,7 @@ fn main() {
         .ok()
         .and_then(|t| t.parse().ok())
         .unwrap_or(1);
-    let warm = std::env::var_os("SINEW_NO_WARM_HEAP").is_none();
+    let warm = sinew_pipeline::heap_warming();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .start_handler(move |_| {

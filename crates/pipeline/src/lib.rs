@@ -38,14 +38,21 @@ pub fn warm_heap() {
     )));
 }
 
+/// Whether the heap warm-ups ([`warm_heap`], [`warm_thread_heap`]) run: unless
+/// `SINEW_NO_WARM_HEAP` is set (for measuring).
+pub fn heap_warming() -> bool {
+    std::env::var_os("SINEW_NO_WARM_HEAP").is_none()
+}
+
 /// The block of [`warm_heap`]: 16 MiB (glibc adjusts its threshold up to 32 MiB).
 pub const WARM_HEAP_BYTES: usize = 16 << 20;
 
 /// Allocates and frees one block of [`WARM_THREAD_HEAP_BYTES`] without touching it, on a worker
 /// thread when it starts. With glibc's allocator a thread allocates from an arena of its own,
-/// whose heap grows by making more of its reserved address space writable (an `mprotect` per
-/// step of about 128 KiB); after [`warm_heap`] has raised the trim threshold to 32 MiB, this
-/// block grows it once to its size and stays, so the thread's allocations below that size
+/// whose heap grows by making more of its reserved address space writable, by what each
+/// allocation lacks (an `mprotect` call each time, most of them one page); after [`warm_heap`]
+/// has raised the trim threshold to 32 MiB, this block grows it once to its size and stays, so
+/// the thread's allocations below that size
 /// neither grow nor shrink it (a Fox convert made about 300 such calls on its two workers,
 /// docs/performance.md, session 25). Its pages are not touched, so none is faulted in; without
 /// [`warm_heap`] the block is mapped and unmapped untouched. With another allocator it is one

@@ -353,15 +353,18 @@ fn rotation_span(times: &[f32], values: &[Quat], interp: Interp, k: usize) -> Op
     }
 }
 
-/// The error measured on a span over `pieces` pieces, their ends worked out at once (the
-/// parameter 2p / 2n is p / n bit for bit, so these are the ends a halving from one piece keeps).
-/// Below the most pieces it may stop at the first point above the tolerance.
-fn pieces_error(span: &RotationSpan, pieces: usize, ratios: &mut Vec<(f32, f32, f32)>) -> f32 {
-    let ends: Vec<Quat> = (0..=pieces)
+/// Below the most pieces, only whether the error is above the tolerance matters until it is not
+/// ([`RotationSpan::nlerp_error`]'s `above`).
+fn above(pieces: usize) -> Option<f32> {
+    (pieces < MAX_SUBDIVISIONS).then_some(ROTATION_TOLERANCE)
+}
+
+/// The span at the ends of `pieces` equal pieces, worked out at once: the parameter 2p / 2n is
+/// p / n bit for bit, so these are the ends a halving from one piece keeps.
+fn piece_ends(span: &RotationSpan, pieces: usize) -> Vec<Quat> {
+    (0..=pieces)
         .map(|p| span.at(p as f32 / pieces as f32))
-        .collect();
-    let above = (pieces < MAX_SUBDIVISIONS).then_some(ROTATION_TOLERANCE);
-    span.nlerp_error(pieces, &ends, above, ratios)
+        .collect()
 }
 
 /// Converts a rotation channel. Values are normalised copies of the glTF quaternions (bit-exact when the
@@ -413,13 +416,7 @@ pub fn rotation_curve_known(
                     out_v.push(key(k));
                     continue;
                 }
-                let mut ends: Vec<Quat> = (0..=pieces)
-                    .map(|p| span.at(p as f32 / pieces as f32))
-                    .collect();
-                // Below the most pieces, only whether the error is above the tolerance matters
-                // until it is not.
-                let above =
-                    |pieces: usize| (pieces < MAX_SUBDIVISIONS).then_some(ROTATION_TOLERANCE);
+                let mut ends = piece_ends(&span, pieces);
                 let mut e = span.nlerp_error(pieces, &ends, above(pieces), &mut ratios);
                 while e > ROTATION_TOLERANCE && pieces < MAX_SUBDIVISIONS {
                     pieces *= 2;
@@ -481,7 +478,12 @@ pub fn certain_interval_error(
     let span = rotation_span(times, values, interp, k)?;
     let (pieces, enough) = span.first_pieces();
     enough?;
-    let e = pieces_error(&span, pieces, &mut Vec::new());
+    let e = span.nlerp_error(
+        pieces,
+        &piece_ends(&span, pieces),
+        above(pieces),
+        &mut Vec::new(),
+    );
     (e <= ROTATION_TOLERANCE).then_some(e)
 }
 
@@ -497,6 +499,16 @@ pub fn unit(q: Quat) -> Quat {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A xorshift generator of values in [-1, 1] from `seed`.
+    fn xorshift(mut s: u32) -> impl FnMut() -> f32 {
+        move || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s as f32 / u32::MAX as f32 * 2.0 - 1.0
+        }
+    }
 
     /// The conversion as first written (a fresh slerp per parameter, every piece's ends evaluated
     /// again): the reference the faster `rotation_curve` must match bit for bit.
@@ -583,13 +595,7 @@ mod tests {
 
     #[test]
     fn rotation_curves_match_the_reference_bit_for_bit() {
-        let mut s = 0x2545_f491u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = xorshift(0x2545_f491);
         let (mut inserted, mut most) = (0, 0);
         for case in 0..400 {
             let n = 2 + case % 7;
@@ -660,13 +666,7 @@ mod tests {
         // measurement must stay within half of it of the analytic value, at every number of
         // pieces, over spans from 0.001 to 3.75 rad (4D angles up to 1.9); where it is large, the
         // two agree to 0.1% (the same quantity, not merely both small).
-        let mut s = 0x2545_f491u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = xorshift(0x2545_f491);
         let (mut worst, mut compared, mut ratios) = (0.0f64, 0, Vec::new());
         for case in 0..3000 {
             let q0 = Quat::from_xyzw(rnd(), rnd(), rnd(), rnd()).normalize();
@@ -710,13 +710,7 @@ mod tests {
         // bound among those certainly within the tolerance measured first, then every channel
         // given that error. The same curves bit for bit, and the same largest error over the
         // channels, as each channel converted alone.
-        let mut s = 0x1234_5678u32;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s as f32 / u32::MAX as f32 * 2.0 - 1.0
-        };
+        let mut rnd = xorshift(0x1234_5678);
         let mut witnessed = 0;
         for case in 0..40 {
             // Four channels of fine and coarse steps (a capture's small turns and a keyed clip's).

@@ -28,9 +28,14 @@ struct Channel {
     prop: Prop,
     interp: Interp,
     times: Vec<f32>,
-    /// The sampler's output, flat (4 floats per rotation key, 3 per translation or scale key;
-    /// three values per key with cubic interpolation).
-    values: Vec<f32>,
+    /// The sampler's output (three values per key with cubic interpolation).
+    values: Keys,
+}
+
+/// A channel's output values.
+enum Keys {
+    Rotations(Vec<Quat>),
+    Vectors(Vec<Vec3>),
 }
 
 /// A channel's curve and its largest measured deviation from the glTF interpolation.
@@ -40,32 +45,35 @@ enum Built {
 }
 
 impl Channel {
-    /// The rotation keys (or cubic triples) of a rotation channel.
-    fn rotations(&self) -> Vec<Quat> {
-        self.values.chunks_exact(4).map(Quat::from_slice).collect()
-    }
-
     /// Of a rotation channel, the interval with the largest bound on its error among those whose
     /// first pieces certainly suffice, and that bound ([`super::anim::largest_certain`]).
     fn largest_certain(&self) -> Option<(f32, usize)> {
-        if self.prop != Prop::R {
-            return None;
+        match &self.values {
+            Keys::Rotations(q) => super::anim::largest_certain(&self.times, q, self.interp),
+            Keys::Vectors(_) => None,
         }
-        super::anim::largest_certain(&self.times, &self.rotations(), self.interp)
+    }
+
+    /// [`super::anim::certain_interval_error`] of a rotation channel's interval ending at key `k`.
+    fn certain_interval_error(&self, k: usize) -> Option<f32> {
+        match &self.values {
+            Keys::Rotations(q) => {
+                super::anim::certain_interval_error(&self.times, q, self.interp, k)
+            }
+            Keys::Vectors(_) => None,
+        }
     }
 
     /// The channel's curve; `known`: a rotation error this import measured already
     /// ([`super::anim::rotation_curve_known`]).
     fn curve(&self, known: f32) -> Built {
-        match self.prop {
-            Prop::R => {
-                let q = self.rotations();
-                let (c, e) = super::anim::rotation_curve_known(&self.times, &q, self.interp, known);
+        match &self.values {
+            Keys::Rotations(q) => {
+                let (c, e) = super::anim::rotation_curve_known(&self.times, q, self.interp, known);
                 Built::Rotation(c, e)
             }
-            Prop::T | Prop::S => {
-                let v: Vec<Vec3> = self.values.chunks_exact(3).map(Vec3::from_slice).collect();
-                let (c, e) = super::anim::vector_curve(&self.times, &v, self.interp);
+            Keys::Vectors(v) => {
+                let (c, e) = super::anim::vector_curve(&self.times, v, self.interp);
                 Built::Vector(c, e)
             }
         }
@@ -205,12 +213,18 @@ pub(super) fn import_animations(
                 ..TrackCurves::default()
             });
             keys += times.len();
+            let values = match prop {
+                Prop::R => Keys::Rotations(out.chunks_exact(4).map(Quat::from_slice).collect()),
+                Prop::T | Prop::S => {
+                    Keys::Vectors(out.chunks_exact(3).map(Vec3::from_slice).collect())
+                }
+            };
             channels.push(Channel {
                 node,
                 prop,
                 interp,
                 times,
-                values: out,
+                values,
             });
         }
         // Each channel's curve is its own (a rotation's densification is most of a long clip's
@@ -235,13 +249,8 @@ pub(super) fn import_animations(
                 Some(b) if b.0 >= c.0 => best,
                 _ => Some(c),
             });
-        if let Some((_, i, k)) = witness {
-            let ch = &channels[i];
-            if let Some(e) =
-                super::anim::certain_interval_error(&ch.times, &ch.rotations(), ch.interp, k)
-            {
-                worst_rot = worst_rot.max(e);
-            }
+        if let Some(e) = witness.and_then(|(_, i, k)| channels[i].certain_interval_error(k)) {
+            worst_rot = worst_rot.max(e);
         }
         let known = worst_rot;
         let built: Vec<Built> = if par {

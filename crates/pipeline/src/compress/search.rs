@@ -111,9 +111,14 @@ pub(super) fn first_eval<'a>(
     // The rung above: `None` when its widths are the start's (the same verdict and state).
     let up = r1.map(|r| settle(r, &mut failed, probe));
     if let Some(start_state) = found.take() {
+        // The start's state is dropped as soon as the rung above replaces it: a long clip's
+        // state is megabytes, and memory a process touches first costs a page fault per page.
         let mut lo_state = match up {
             None => start_state,
-            Some(Some(e)) => e,
+            Some(Some(e)) => {
+                drop(start_state);
+                e
+            }
             Some(None) => return Some((budget, start_state)),
         };
         // Up: rung k is `start` times `step` k times (multiplied one at a time, as a rung-by-rung
@@ -164,6 +169,8 @@ pub(super) fn first_eval<'a>(
         budget = rung(lo);
         found = Some(lo_state);
     } else {
+        // (The rung above cannot be the answer here: its state, if it passed, is not kept.)
+        drop(up);
         // Down: rung k is `start` divided by `step` k times (one at a time, as a rung-by-rung
         // descent computes it), at most `BOTTOM`. Most layouts pass one to three rungs down,
         // measured one by one; below, galloping (rungs 5, 9, 17, ...) then bisecting finds the
@@ -451,6 +458,20 @@ pub(super) fn estimated_candidates<'a>(
             continue;
         };
         sized.push((size, li, budget, measured));
+        // A measured state whose layout is already out of the `count` smallest stays out (later
+        // layouts only add to those before it): dropped now rather than kept through the next
+        // works' ladders (a long clip's state is megabytes, each page a page fault when first
+        // touched). The same layouts are chosen, with the same states.
+        if sized.len() > count {
+            let mut keys: Vec<(usize, usize)> = sized.iter().map(|f| (f.0, f.1)).collect();
+            keys.sort_unstable();
+            let last_chosen = count.checked_sub(1).map(|i| keys[i]);
+            for f in &mut sized {
+                if last_chosen.is_none_or(|last| (f.0, f.1) > last) {
+                    f.3 = None;
+                }
+            }
+        }
     }
     sized.sort_by_key(|f| (f.0, f.1));
     sized.truncate(count);

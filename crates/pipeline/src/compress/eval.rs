@@ -149,7 +149,10 @@ pub(super) struct Eval<'a> {
     pub(super) key_rot: Vec<Quat>,
     /// Per source time, per joint (time-major): the quantized clip's local pose as an affine
     /// transform (the pose itself is `base` with the sampled channels, recomputed when needed),
-    /// and its model transform.
+    /// and its model transform. A checked build ([`Eval::build`]) computes the model transforms
+    /// alone: most checks are of widths that are then dropped, and a long clip's local poses are
+    /// megabytes the process would touch for nothing (a page fault per page, and the stores); a
+    /// refinement fills them in first ([`Eval::fill_local`]).
     pub(super) local_aff: Vec<Affine3A>,
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
@@ -335,7 +338,7 @@ impl<'a> Eval<'a> {
             compensate,
             // Filled time by time ([`Eval::resample`]): a check that fails early touches little
             // of this memory (a fresh process pays a page fault for every page it touches).
-            local_aff: Vec::with_capacity(nj * at.len()),
+            local_aff: Vec::new(),
             model: Vec::with_capacity(nj * at.len()),
             nj,
             parents: (0..nj)
@@ -385,11 +388,12 @@ impl<'a> Eval<'a> {
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
         let mut next = 0;
+        let mut local = vec![Affine3A::IDENTITY; nj];
         for i in 0..e.at.len() {
             let need = e.keys_read_before(i);
             e.requantize_keys(next..need, &mut row);
             next = next.max(need);
-            e.resample(i);
+            e.resample(i, &mut local);
             if check {
                 let at = (i - e.first_time) * nj;
                 match e.time_ratio(i, &e.model[at..at + nj]) {
@@ -425,24 +429,20 @@ impl<'a> Eval<'a> {
             let need = self.keys_read_before(t1 - 1);
             self.quantize_keys_side_by_side(next..need.max(next), chunks);
             next = next.max(need);
-            let mut local = std::mem::take(&mut self.local_aff);
             let mut model = std::mem::take(&mut self.model);
-            local.resize(t1 * nj, Affine3A::IDENTITY);
             model.resize(t1 * nj, Affine3A::IDENTITY);
             let per = (t1 - t0).div_ceil(chunks).max(MIN_TIMES_PER_CHUNK);
             let state: &Eval = self;
             // Per chunk: its first failing time, or its first time of the largest ratio.
-            let found: Vec<Result<(f32, usize), usize>> = local[t0 * nj..]
+            let found: Vec<Result<(f32, usize), usize>> = model[t0 * nj..]
                 .par_chunks_mut(per * nj)
-                .zip(model[t0 * nj..].par_chunks_mut(per * nj))
                 .enumerate()
-                .map(|(ci, (local, model))| {
+                .map(|(ci, model)| {
                     let mut worst = (0.0f32, 0usize);
-                    for (t, (local, model)) in
-                        local.chunks_mut(nj).zip(model.chunks_mut(nj)).enumerate()
-                    {
+                    let mut local = vec![Affine3A::IDENTITY; nj];
+                    for (t, model) in model.chunks_mut(nj).enumerate() {
                         let i = t0 + ci * per + t;
-                        state.pose_into(i, local, model);
+                        state.pose_into(i, &mut local, model);
                         if check {
                             match state.time_ratio(i, model) {
                                 None => return Err(i),
@@ -454,7 +454,6 @@ impl<'a> Eval<'a> {
                     Ok(worst)
                 })
                 .collect();
-            self.local_aff = local;
             self.model = model;
             for f in found {
                 match f {
@@ -518,7 +517,7 @@ impl<'a> Eval<'a> {
         (self.qi, self.dec, self.raw, self.key_rot) = (qi, dec, raw, rot);
     }
 
-    /// [`Eval::build`] without the check.
+    /// [`Eval::build`] without the check, with its local poses ([`Eval::fill_local`]).
     pub(super) fn new(
         ctx: &'a Ctx<'a>,
         layout: &'a Layout,
@@ -526,7 +525,9 @@ impl<'a> Eval<'a> {
         bits: Vec<u8>,
         compensate: bool,
     ) -> Eval<'a> {
-        Eval::build(ctx, layout, work, bits, compensate, false, [None; PROBES]).0
+        let mut e = Eval::build(ctx, layout, work, bits, compensate, false, [None; PROBES]).0;
+        e.fill_local();
+        e
     }
 
     pub(super) fn parent(&self, j: usize) -> Option<usize> {
@@ -627,21 +628,50 @@ impl<'a> Eval<'a> {
         }
     }
 
-    /// Computes every joint's local pose and model transform at source time `i` (parents first).
-    /// While the state is being built, the times are computed in order and each one's transforms
-    /// are appended; after that, they are replaced.
-    fn resample(&mut self, i: usize) {
+    /// Computes every joint's model transform at source time `i` (parents first; `local`: one
+    /// row of scratch space for the local poses). While the state is being built, the times are
+    /// computed in order and each one's transforms are appended; after that, they are replaced.
+    fn resample(&mut self, i: usize, local: &mut [Affine3A]) {
         let nj = self.nj;
         let row = (i - self.first_time) * nj;
         if row == self.model.len() {
-            self.local_aff.resize(row + nj, Affine3A::IDENTITY);
             self.model.resize(row + nj, Affine3A::IDENTITY);
         }
-        let mut local = std::mem::take(&mut self.local_aff);
         let mut model = std::mem::take(&mut self.model);
-        self.pose_into(i, &mut local[row..row + nj], &mut model[row..row + nj]);
-        self.local_aff = local;
+        self.pose_into(i, local, &mut model[row..row + nj]);
         self.model = model;
+    }
+
+    /// Fills in the local poses of a whole state whose model transforms are computed (a checked
+    /// build leaves them out): the values [`Eval::pose_into`] computes, time by time (side by
+    /// side for a long clip). A state that has them is left as it is.
+    pub(super) fn fill_local(&mut self) {
+        let nj = self.nj;
+        if nj == 0 || self.local_aff.len() == self.model.len() {
+            return;
+        }
+        let times = self.model.len() / nj;
+        let mut local = std::mem::take(&mut self.local_aff);
+        local.clear();
+        local.resize(times * nj, Affine3A::IDENTITY);
+        let state: &Eval = self;
+        let fill = |(t, row): (usize, &mut [Affine3A])| {
+            let i = state.first_time + t;
+            for (d, l) in row.iter_mut().enumerate() {
+                *l = state.local_pose(d, i).to_affine();
+            }
+        };
+        if times * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+            let per = MIN_TIMES_PER_CHUNK * nj;
+            local.par_chunks_mut(per).enumerate().for_each(|(c, rows)| {
+                rows.chunks_mut(nj)
+                    .enumerate()
+                    .for_each(|(t, row)| fill((c * MIN_TIMES_PER_CHUNK + t, row)));
+            });
+        } else {
+            local.chunks_mut(nj).enumerate().for_each(fill);
+        }
+        self.local_aff = local;
     }
 
     /// Every joint's local and model transform at source time `i` into `local` and `model` (one

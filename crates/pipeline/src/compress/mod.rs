@@ -100,6 +100,8 @@ mod reduce_tests;
 mod refine;
 mod search;
 #[cfg(test)]
+mod state_tests;
+#[cfg(test)]
 mod tests;
 mod trial;
 

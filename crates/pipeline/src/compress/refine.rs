@@ -33,6 +33,7 @@ type Refined = (
 /// copied back. Every try sees what it would see one at a time, so the result is the same at any
 /// thread count.
 pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
+    eval.fill_local();
     let nc = eval.layout.comps.len();
     let segs = eval.layout.seg_count;
     if nc == 0 || segs == 0 {

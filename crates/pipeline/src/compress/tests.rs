@@ -368,7 +368,7 @@ fn swinging_chain() -> (Clip, Rig) {
 }
 
 /// A moving, swinging chain of `joints` joints with `keys` keys: its source clip and rig.
-fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
+pub(super) fn moving_chain(joints: usize, keys: usize) -> (Clip, Rig) {
     let skeleton = chain(joints, 0.35);
     let source = swing_moving(&skeleton, keys, true).to_plain();
     let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
@@ -952,46 +952,4 @@ fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() 
     // At a tolerance where slerp and nlerp differ by more than 1% of it, nothing is left out.
     let src = rig.all_points(&rig.poses(&clip, clip.times()));
     assert!(thinned(&clip, &rig, &src, None, 1e-7).is_none());
-}
-
-#[test]
-fn the_candidates_chosen_are_the_first_of_a_longer_list() {
-    // estimated_candidates drops a measured state as soon as its layout is out of the `count`
-    // smallest: the one candidate it returns is the first of those it returns for every layout,
-    // with the same widths and stored integers.
-    const TOLERANCE: f32 = 0.01;
-    let (source, rig) = moving_chain(6, 90);
-    let ctx = Ctx::new(&rig, &source, source.times(), TOLERANCE);
-    let base = Work::from_plain(&source);
-    let n = base.times.len();
-    let works: Vec<Work> = [1usize, 2, 3]
-        .iter()
-        .map(|&every| {
-            let mut w = base.clone();
-            w.keep(
-                &(0..n)
-                    .filter(|i| i % every == 0 || *i == n - 1)
-                    .collect::<Vec<_>>(),
-            );
-            w
-        })
-        .collect();
-    let layouts: Vec<(usize, Layout, bool)> = (0..works.len())
-        .flat_map(|wi| [8, 16, 32].map(|l| (wi, l)))
-        .map(|(wi, l)| (wi, Layout::new(&works[wi], &rig, l, true), true))
-        .collect();
-    let pick = |count: usize| -> Vec<(usize, Vec<u8>, Vec<Vec<u32>>)> {
-        estimated_candidates(
-            &ctx, &layouts, &works, &source, TOLERANCE, true, false, count,
-        )
-        .into_iter()
-        .map(|(li, e)| (li, e.bits, e.qi))
-        .collect()
-    };
-    let (one, all) = (pick(1), pick(layouts.len()));
-    assert_eq!(one.len(), 1);
-    // Layouts of two works (the third keeps too few keys for the tolerance), so states of
-    // both works' ladders were measured, and dropped where their layouts lost.
-    assert_eq!(all.len(), 6);
-    assert_eq!(one[0], all[0]);
 }

@@ -1,0 +1,109 @@
+//! Unit tests of how the encoder keeps its states: which it keeps while it searches, and the
+//! local poses a checked build leaves out (a file apart from `tests.rs`, whose helpers it uses).
+
+#![allow(clippy::unwrap_used)]
+use super::eval::{Ctx, Eval, PROBES};
+use super::quantize::Layout;
+use super::reduce::Work;
+use super::search::{estimated_candidates, first_state};
+use super::tests::moving_chain;
+use sinew_core::glam::Affine3A;
+
+#[test]
+fn the_candidates_chosen_are_the_first_of_a_longer_list() {
+    // estimated_candidates drops a measured state as soon as its layout is out of the `count`
+    // smallest: the one candidate it returns is the first of those it returns for every layout,
+    // with the same widths and stored integers.
+    const TOLERANCE: f32 = 0.01;
+    let (source, rig) = moving_chain(6, 90);
+    let ctx = Ctx::new(&rig, &source, source.times(), TOLERANCE);
+    let base = Work::from_plain(&source);
+    let n = base.times.len();
+    let works: Vec<Work> = [1usize, 2, 3]
+        .iter()
+        .map(|&every| {
+            let mut w = base.clone();
+            w.keep(
+                &(0..n)
+                    .filter(|i| i % every == 0 || *i == n - 1)
+                    .collect::<Vec<_>>(),
+            );
+            w
+        })
+        .collect();
+    let layouts: Vec<(usize, Layout, bool)> = (0..works.len())
+        .flat_map(|wi| [8, 16, 32].map(|l| (wi, l)))
+        .map(|(wi, l)| (wi, Layout::new(&works[wi], &rig, l, true), true))
+        .collect();
+    let pick = |count: usize| -> Vec<(usize, Vec<u8>, Vec<Vec<u32>>)> {
+        estimated_candidates(
+            &ctx, &layouts, &works, &source, TOLERANCE, true, false, count,
+        )
+        .into_iter()
+        .map(|(li, e)| (li, e.bits, e.qi))
+        .collect()
+    };
+    let (one, all) = (pick(1), pick(layouts.len()));
+    assert_eq!(one.len(), 1);
+    // Layouts of two works (the third keeps too few keys for the tolerance), so states of
+    // both works' ladders were measured, and dropped where their layouts lost.
+    assert_eq!(all.len(), 6);
+    assert_eq!(one[0], all[0]);
+}
+
+#[test]
+fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from() {
+    // A checked build computes the model transforms alone; `fill_local` then computes the local
+    // poses. Each model transform is its parent's times its local pose, bit for bit, as the build
+    // multiplied them: on a short clip (time by time) and on a long one at 1, 2 and 3 threads
+    // (chunks side by side), with the same local poses at every thread count.
+    for keys in [90, 3000] {
+        let (source, rig) = moving_chain(6, keys);
+        let work = Work::from_plain(&source);
+        let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+        let layout = Layout::new(&work, &rig, 16, true);
+        let (_, bits, _) =
+            first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
+        let locals = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let (mut e, verdict) = Eval::build(
+                    &ctx,
+                    &layout,
+                    &work,
+                    bits.clone(),
+                    true,
+                    true,
+                    [None; PROBES],
+                );
+                assert!(verdict.is_ok());
+                assert!(
+                    e.local_aff.is_empty(),
+                    "a checked build keeps no local pose"
+                );
+                e.fill_local();
+                let nj = e.nj;
+                assert_eq!(e.local_aff.len(), e.model.len());
+                for (local, model) in e.local_aff.chunks(nj).zip(e.model.chunks(nj)) {
+                    for d in 0..nj {
+                        let parent = e.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
+                        let again = parent * local[d];
+                        assert_eq!(again.to_cols_array(), model[d].to_cols_array());
+                    }
+                }
+                e.local_aff
+                    .iter()
+                    .map(|m| m.to_cols_array().map(f32::to_bits))
+                    .collect::<Vec<_>>()
+            })
+        };
+        let one = locals(1);
+        assert_eq!(one.len(), keys * 6);
+        for threads in [2, 3] {
+            assert_eq!(locals(threads), one, "{keys} keys, {threads} threads");
+        }
+    }
+}

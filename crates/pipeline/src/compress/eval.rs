@@ -149,10 +149,11 @@ pub(super) struct Eval<'a> {
     pub(super) key_rot: Vec<Quat>,
     /// Per source time, per joint (time-major): the quantized clip's local pose as an affine
     /// transform (the pose itself is `base` with the sampled channels, recomputed when needed),
-    /// and its model transform. A checked build ([`Eval::build`]) computes the model transforms
-    /// alone: most checks are of widths that are then dropped, and a long clip's local poses are
-    /// megabytes the process would touch for nothing (a page fault per page, and the stores); a
-    /// refinement fills them in first ([`Eval::fill_local`]).
+    /// and its model transform. A long clip's checked build ([`Eval::build`], from
+    /// [`KEEP_LOCAL_BELOW`] joint-times) computes the model transforms alone: most checks are of
+    /// widths that are then dropped, and its local poses are megabytes the process would touch for
+    /// nothing (a page fault per page, and the stores); a refinement fills them in first
+    /// ([`Eval::fill_local`]).
     pub(super) local_aff: Vec<Affine3A>,
     pub(super) model: Vec<Affine3A>,
     /// Per segment: the source times that read one of its keys.
@@ -176,6 +177,12 @@ struct KeyRow {
 /// Joint-times from which [`Eval::build`] quantizes keys and computes times in chunks side by side
 /// (a long clip's passing check is a few milliseconds of work).
 const SIDE_BY_SIDE_BUILD: usize = 16 * 1024;
+/// Joint-times below which a checked build keeps its local poses as it computes them (4 MiB of
+/// them): a shorter clip's are little memory, soon reused, and computing them again for the state
+/// a refinement starts from ([`Eval::fill_local`]) costs most of a pass (with 16 Ki here the
+/// Half-Life batch was 1.2-1.7% slower); a long clip's are megabytes touched for nothing in most
+/// checks (docs/performance.md, session 26).
+const KEEP_LOCAL_BELOW: usize = 64 * 1024;
 /// Source times of the first block of [`Eval::build`]'s side-by-side passes (each block after a
 /// passing one twice as long, at most `MAX_TIMES_PER_BLOCK`), and the fewest keys and source
 /// times per chunk of a block (a chunk much shorter costs more in waiting than it saves).
@@ -337,8 +344,13 @@ impl<'a> Eval<'a> {
             layout,
             compensate,
             // Filled time by time ([`Eval::resample`]): a check that fails early touches little
-            // of this memory (a fresh process pays a page fault for every page it touches).
-            local_aff: Vec::new(),
+            // of this memory (a fresh process pays a page fault for every page it touches). A
+            // long clip's check leaves the local poses out ([`KEEP_LOCAL_BELOW`]).
+            local_aff: if nj * at.len() < KEEP_LOCAL_BELOW {
+                Vec::with_capacity(nj * at.len())
+            } else {
+                Vec::new()
+            },
             model: Vec::with_capacity(nj * at.len()),
             nj,
             parents: (0..nj)
@@ -388,12 +400,17 @@ impl<'a> Eval<'a> {
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
         let mut next = 0;
-        let mut local = vec![Affine3A::IDENTITY; nj];
+        let keep_local = e.local_aff.capacity() >= e.at.len() * nj;
+        let mut local = vec![Affine3A::IDENTITY; if keep_local { 0 } else { nj }];
         for i in 0..e.at.len() {
             let need = e.keys_read_before(i);
             e.requantize_keys(next..need, &mut row);
             next = next.max(need);
-            e.resample(i, &mut local);
+            if keep_local {
+                e.resample(i);
+            } else {
+                e.resample_models(i, &mut local);
+            }
             if check {
                 let at = (i - e.first_time) * nj;
                 match e.time_ratio(i, &e.model[at..at + nj]) {
@@ -429,31 +446,52 @@ impl<'a> Eval<'a> {
             let need = self.keys_read_before(t1 - 1);
             self.quantize_keys_side_by_side(next..need.max(next), chunks);
             next = next.max(need);
+            let keep = self.local_aff.capacity() >= times * nj;
+            let mut local = std::mem::take(&mut self.local_aff);
             let mut model = std::mem::take(&mut self.model);
+            if keep {
+                local.resize(t1 * nj, Affine3A::IDENTITY);
+            }
             model.resize(t1 * nj, Affine3A::IDENTITY);
             let per = (t1 - t0).div_ceil(chunks).max(MIN_TIMES_PER_CHUNK);
             let state: &Eval = self;
-            // Per chunk: its first failing time, or its first time of the largest ratio.
-            let found: Vec<Result<(f32, usize), usize>> = model[t0 * nj..]
-                .par_chunks_mut(per * nj)
-                .enumerate()
-                .map(|(ci, model)| {
-                    let mut worst = (0.0f32, 0usize);
-                    let mut local = vec![Affine3A::IDENTITY; nj];
-                    for (t, model) in model.chunks_mut(nj).enumerate() {
-                        let i = t0 + ci * per + t;
-                        state.pose_into(i, &mut local, model);
-                        if check {
-                            match state.time_ratio(i, model) {
-                                None => return Err(i),
-                                Some(r) if r > worst.0 => worst = (r, i),
-                                Some(_) => {}
-                            }
+            // One chunk: its first failing time, or its first time of the largest ratio. Its
+            // local poses go into `kept` (the state's, when it keeps them) or a row of scratch.
+            let chunk = |ci: usize, model: &mut [Affine3A], mut kept: Option<&mut [Affine3A]>| {
+                let mut worst = (0.0f32, 0usize);
+                let mut scratch = vec![Affine3A::IDENTITY; if kept.is_some() { 0 } else { nj }];
+                for (t, model) in model.chunks_mut(nj).enumerate() {
+                    let i = t0 + ci * per + t;
+                    let local = match kept.as_deref_mut() {
+                        Some(k) => &mut k[t * nj..(t + 1) * nj],
+                        None => &mut scratch[..],
+                    };
+                    state.pose_into(i, local, model);
+                    if check {
+                        match state.time_ratio(i, model) {
+                            None => return Err(i),
+                            Some(r) if r > worst.0 => worst = (r, i),
+                            Some(_) => {}
                         }
                     }
-                    Ok(worst)
-                })
-                .collect();
+                }
+                Ok(worst)
+            };
+            let found: Vec<Result<(f32, usize), usize>> = if keep {
+                local[t0 * nj..]
+                    .par_chunks_mut(per * nj)
+                    .zip(model[t0 * nj..].par_chunks_mut(per * nj))
+                    .enumerate()
+                    .map(|(ci, (local, model))| chunk(ci, model, Some(local)))
+                    .collect()
+            } else {
+                model[t0 * nj..]
+                    .par_chunks_mut(per * nj)
+                    .enumerate()
+                    .map(|(ci, model)| chunk(ci, model, None))
+                    .collect()
+            };
+            self.local_aff = local;
             self.model = model;
             for f in found {
                 match f {
@@ -628,10 +666,26 @@ impl<'a> Eval<'a> {
         }
     }
 
-    /// Computes every joint's model transform at source time `i` (parents first; `local`: one
-    /// row of scratch space for the local poses). While the state is being built, the times are
-    /// computed in order and each one's transforms are appended; after that, they are replaced.
-    fn resample(&mut self, i: usize, local: &mut [Affine3A]) {
+    /// Computes every joint's local pose and model transform at source time `i` (parents first).
+    /// While the state is being built, the times are computed in order and each one's transforms
+    /// are appended; after that, they are replaced.
+    fn resample(&mut self, i: usize) {
+        let nj = self.nj;
+        let row = (i - self.first_time) * nj;
+        if row == self.model.len() {
+            self.local_aff.resize(row + nj, Affine3A::IDENTITY);
+            self.model.resize(row + nj, Affine3A::IDENTITY);
+        }
+        let mut local = std::mem::take(&mut self.local_aff);
+        let mut model = std::mem::take(&mut self.model);
+        self.pose_into(i, &mut local[row..row + nj], &mut model[row..row + nj]);
+        self.local_aff = local;
+        self.model = model;
+    }
+
+    /// [`Eval::resample`] of a state that leaves its local poses out ([`KEEP_LOCAL_BELOW`]):
+    /// the model transforms alone (`local`: one row of scratch space).
+    fn resample_models(&mut self, i: usize, local: &mut [Affine3A]) {
         let nj = self.nj;
         let row = (i - self.first_time) * nj;
         if row == self.model.len() {
@@ -655,21 +709,26 @@ impl<'a> Eval<'a> {
         local.clear();
         local.resize(times * nj, Affine3A::IDENTITY);
         let state: &Eval = self;
-        let fill = |(t, row): (usize, &mut [Affine3A])| {
-            let i = state.first_time + t;
-            for (d, l) in row.iter_mut().enumerate() {
-                *l = state.local_pose(d, i).to_affine();
-            }
+        // Through `pose_into` (its model transforms into scratch space), so that the local poses
+        // are the ones a build computes and `local_pose` keeps the one caller it is inlined into
+        // (called from here too, it was not, and the Half-Life batch took 2% more CPU).
+        let fill = |(t, row): (usize, &mut [Affine3A]), models: &mut Vec<Affine3A>| {
+            models.resize(nj, Affine3A::IDENTITY);
+            state.pose_into(state.first_time + t, row, models);
         };
         if times * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
             let per = MIN_TIMES_PER_CHUNK * nj;
             local.par_chunks_mut(per).enumerate().for_each(|(c, rows)| {
-                rows.chunks_mut(nj)
-                    .enumerate()
-                    .for_each(|(t, row)| fill((c * MIN_TIMES_PER_CHUNK + t, row)));
+                let mut models = Vec::new();
+                for (t, row) in rows.chunks_mut(nj).enumerate() {
+                    fill((c * MIN_TIMES_PER_CHUNK + t, row), &mut models);
+                }
             });
         } else {
-            local.chunks_mut(nj).enumerate().for_each(fill);
+            let mut models = Vec::new();
+            for (t, row) in local.chunks_mut(nj).enumerate() {
+                fill((t, row), &mut models);
+            }
         }
         self.local_aff = local;
     }

@@ -99,6 +99,7 @@ mod reduce;
 mod reduce_tests;
 mod refine;
 mod search;
+mod segment;
 #[cfg(test)]
 mod state_tests;
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! Step 3, second part: the refinement of a state's bit widths, one bit at a time, with the
 //! segments of one parity worked on side by side.
 
-use super::eval::{Eval, SegmentState};
+use super::eval::Eval;
+use super::segment::SegmentState;
 use super::trial::{Trial, MAX_PROBES};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError, RwLock};

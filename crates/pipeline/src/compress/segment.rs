@@ -1,0 +1,171 @@
+//! A state's copies for the refinement's segments side by side: what one segment's tries read
+//! of an [`Eval`] ([`Eval::empty_copy`], [`Eval::load_segment`]) and what they write back
+//! ([`Eval::segment_state`], [`Eval::store_segment`]).
+
+use super::eval::Eval;
+use super::quantize::Quant;
+use sinew_core::glam::{Affine3A, Quat};
+
+/// What refining one segment writes in an [`Eval`] ([`Eval::segment_state`]): the segment's
+/// widths and quantization parameters, its keys' stored integers, decoded values, rotations and
+/// model rotations, and the local and model transforms at the source times that read its keys.
+pub(super) struct SegmentState {
+    s: usize,
+    bits: Vec<u8>,
+    params: Vec<Quant>,
+    /// Per component, per key of the segment.
+    qi: Vec<u32>,
+    dec: Vec<f32>,
+    /// Per rotation, per key of the segment.
+    raw: Vec<Quat>,
+    /// Per key of the segment, per joint.
+    key_rot: Vec<Quat>,
+    /// Per source time that reads the segment (in `seg_times` order), per joint.
+    local_aff: Vec<Affine3A>,
+    model: Vec<Affine3A>,
+}
+
+impl<'a> Eval<'a> {
+    /// A copy of this state without its per-key and per-time values: what
+    /// [`Eval::load_segment`] fills with one segment's neighbourhood.
+    pub(super) fn empty_copy(&self) -> Eval<'a> {
+        Eval {
+            ctx: self.ctx,
+            layout: self.layout,
+            compensate: self.compensate,
+            at: self.at.clone(),
+            key_src: self.key_src.clone(),
+            joint: self.joint.clone(),
+            track_of: self.track_of.clone(),
+            first: self.first.clone(),
+            subtree: self.subtree,
+            subtree_parent: self.subtree_parent,
+            base: self.base.clone(),
+            bits: self.bits.clone(),
+            params: self.params.clone(),
+            qi: vec![Vec::new(); self.qi.len()],
+            dec: vec![Vec::new(); self.dec.len()],
+            raw: vec![Vec::new(); self.raw.len()],
+            nj: self.nj,
+            parents: self.parents.clone(),
+            key_rot: Vec::new(),
+            local_aff: Vec::new(),
+            model: Vec::new(),
+            seg_times: self.seg_times.clone(),
+            first_key: 0,
+            first_time: 0,
+        }
+    }
+
+    /// Makes this copy ([`Eval::empty_copy`]) of a state hold what a refinement of segment `s`
+    /// reads in `from` (the state): the segment's widths and parameters, its keys and the keys
+    /// next to it (a source time that reads the segment reads at most one key on either side),
+    /// and every joint's transforms at the source times that read the segment (a run of
+    /// consecutive times). Only that region is held (`first_key`, `first_time`).
+    pub(super) fn load_segment(&mut self, from: &Eval, s: usize) {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(s);
+        let near = keys.start.saturating_sub(1)..(keys.end + 1).min(self.layout.keys);
+        let times = &self.seg_times[s];
+        let span = match (times.first(), times.last()) {
+            (Some(&a), Some(&b)) => a..b + 1,
+            _ => 0..0,
+        };
+        let own = s * nc..(s + 1) * nc;
+        self.bits[own.clone()].copy_from_slice(&from.bits[own.clone()]);
+        self.params[own.clone()].copy_from_slice(&from.params[own]);
+        let from_keys = near.start - from.first_key..near.end - from.first_key;
+        load_keys(&mut self.qi, &from.qi, &from_keys);
+        load_keys(&mut self.dec, &from.dec, &from_keys);
+        load_keys(&mut self.raw, &from.raw, &from_keys);
+        self.key_rot.clear();
+        self.key_rot
+            .extend_from_slice(&from.key_rot[from_keys.start * nj..from_keys.end * nj]);
+        let rows = (span.start - from.first_time) * nj..(span.end - from.first_time) * nj;
+        self.local_aff.clear();
+        self.local_aff
+            .extend_from_slice(&from.local_aff[rows.clone()]);
+        self.model.clear();
+        self.model.extend_from_slice(&from.model[rows]);
+        (self.first_key, self.first_time) = (near.start, span.start);
+    }
+
+    /// What a refinement of segment `s` may have written ([`SegmentState`]).
+    pub(super) fn segment_state(&self, s: usize) -> SegmentState {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(s);
+        let here = keys.start - self.first_key..keys.end - self.first_key;
+        let own = s * nc..(s + 1) * nc;
+        let times = &self.seg_times[s];
+        let rows = |i: usize| (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
+        let mut local_aff = Vec::with_capacity(times.len() * nj);
+        let mut model = Vec::with_capacity(times.len() * nj);
+        for &i in times {
+            local_aff.extend_from_slice(&self.local_aff[rows(i)]);
+            model.extend_from_slice(&self.model[rows(i)]);
+        }
+        SegmentState {
+            s,
+            bits: self.bits[own.clone()].to_vec(),
+            params: self.params[own].to_vec(),
+            qi: gather_keys(&self.qi, &here),
+            dec: gather_keys(&self.dec, &here),
+            raw: gather_keys(&self.raw, &here),
+            key_rot: self.key_rot[here.start * nj..here.end * nj].to_vec(),
+            local_aff,
+            model,
+        }
+    }
+
+    /// Writes back what [`Eval::segment_state`] took (from a copy of this state).
+    pub(super) fn store_segment(&mut self, st: &SegmentState) {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let keys = self.layout.seg_keys(st.s);
+        let here = keys.start - self.first_key..keys.end - self.first_key;
+        let own = st.s * nc..(st.s + 1) * nc;
+        self.bits[own.clone()].copy_from_slice(&st.bits);
+        self.params[own].copy_from_slice(&st.params);
+        scatter_keys(&mut self.qi, &st.qi, &here);
+        scatter_keys(&mut self.dec, &st.dec, &here);
+        scatter_keys(&mut self.raw, &st.raw, &here);
+        self.key_rot[here.start * nj..here.end * nj].copy_from_slice(&st.key_rot);
+        let times = std::mem::take(&mut self.seg_times[st.s]);
+        for (n, &i) in times.iter().enumerate() {
+            let rows = (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
+            self.local_aff[rows.clone()].copy_from_slice(&st.local_aff[n * nj..(n + 1) * nj]);
+            self.model[rows].copy_from_slice(&st.model[n * nj..(n + 1) * nj]);
+        }
+        self.seg_times[st.s] = times;
+    }
+}
+
+/// Per-component (or per-rotation) key arrays: `to` made to hold `from`'s keys `range` (indices
+/// into `from`).
+fn load_keys<T: Copy>(to: &mut [Vec<T>], from: &[Vec<T>], range: &std::ops::Range<usize>) {
+    for (to, from) in to.iter_mut().zip(from) {
+        to.clear();
+        to.extend_from_slice(&from[range.clone()]);
+    }
+}
+
+/// Per-component key arrays: the keys `range` of each, one array after the other.
+fn gather_keys<T: Copy>(arrays: &[Vec<T>], range: &std::ops::Range<usize>) -> Vec<T> {
+    let mut out = Vec::with_capacity(arrays.len() * range.len());
+    for v in arrays {
+        out.extend_from_slice(&v[range.clone()]);
+    }
+    out
+}
+
+/// The inverse of [`gather_keys`]: `gathered`'s runs written back into keys `range` of each array.
+fn scatter_keys<T: Copy>(arrays: &mut [Vec<T>], gathered: &[T], range: &std::ops::Range<usize>) {
+    for (to, from) in arrays
+        .iter_mut()
+        .zip(gathered.chunks_exact(range.len().max(1)))
+    {
+        to[range.clone()].copy_from_slice(from);
+    }
+}

@@ -41,9 +41,7 @@ pub fn main_entry() -> ExitCode {
         // starts, as a batch's own pool does (`convert`); after the arguments, so that `--help`
         // and `--version` start no thread. If it cannot be built here, rayon builds it on first
         // use as before.
-        let _ = rayon::ThreadPoolBuilder::new()
-            .start_handler(|_| sinew_pipeline::warm_thread_heap())
-            .build_global();
+        let _ = sinew_pipeline::warmed_pool_builder().build_global();
     }
     let ctx = output::Ctx {
         json: args.global.json,

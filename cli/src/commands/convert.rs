@@ -588,13 +588,8 @@ pub fn run(args: &ConvertArgs, ctx: &Ctx) -> anyhow::Result<Status> {
         }
         b
     });
-    let pool = rayon::ThreadPoolBuilder::new()
+    let pool = sinew_pipeline::warmed_pool_builder()
         .num_threads(args.jobs.unwrap_or(0))
-        .start_handler(|_| {
-            if sinew_pipeline::heap_warming() {
-                sinew_pipeline::warm_thread_heap();
-            }
-        })
         .build()
         .map_err(|e| anyhow!("--jobs: cannot start worker threads: {e}"))?;
     // Largest inputs first (by file size), each worker taking the next job when it is free, so one

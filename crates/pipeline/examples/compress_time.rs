@@ -30,14 +30,8 @@ fn main() {
         .ok()
         .and_then(|t| t.parse().ok())
         .unwrap_or(1);
-    let warm = sinew_pipeline::heap_warming();
-    let pool = rayon::ThreadPoolBuilder::new()
+    let pool = sinew_pipeline::warmed_pool_builder()
         .num_threads(threads)
-        .start_handler(move |_| {
-            if warm {
-                sinew_pipeline::warm_thread_heap();
-            }
-        })
         .build()
         .unwrap();
     let mut options = if std::env::var("SINEW_SETTING").as_deref() == Ok("default") {

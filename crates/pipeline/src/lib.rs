@@ -52,15 +52,26 @@ pub const WARM_HEAP_BYTES: usize = 16 << 20;
 /// whose heap grows by making more of its reserved address space writable, by what each
 /// allocation lacks (an `mprotect` call each time, most of them one page); after [`warm_heap`]
 /// has raised the trim threshold to 32 MiB, this block grows it once to its size and stays, so
-/// the thread's allocations below that size
-/// neither grow nor shrink it (a Fox convert made about 300 such calls on its two workers,
-/// docs/performance.md, session 25). Its pages are not touched, so none is faulted in; without
-/// [`warm_heap`] the block is mapped and unmapped untouched. With another allocator it is one
-/// allocation and nothing else.
+/// the thread's allocations below that size neither grow nor shrink it (a Fox convert made about
+/// 300 such calls on its two workers, docs/performance.md, session 25). Its pages are not
+/// touched, so none is faulted in; without [`warm_heap`] the block is mapped and unmapped
+/// untouched. With another allocator it is one allocation and nothing else.
 pub fn warm_thread_heap() {
     drop(std::hint::black_box(Vec::<u8>::with_capacity(
         WARM_THREAD_HEAP_BYTES,
     )));
+}
+
+/// A thread pool builder whose workers warm their heaps as they start ([`warm_thread_heap`]),
+/// unless `SINEW_NO_WARM_HEAP` is set ([`heap_warming`]): the `sinew` binary's pools and the
+/// encoder's timing example.
+pub fn warmed_pool_builder() -> rayon::ThreadPoolBuilder {
+    let warm = heap_warming();
+    rayon::ThreadPoolBuilder::new().start_handler(move |_| {
+        if warm {
+            warm_thread_heap();
+        }
+    })
 }
 
 /// The block of [`warm_thread_heap`]: 8 MiB, below [`WARM_HEAP_BYTES`] (so it comes from the

@@ -183,6 +183,12 @@ const SIDE_BY_SIDE_BUILD: usize = 16 * 1024;
 /// Half-Life batch was 1.2-1.7% slower); a long clip's are megabytes touched for nothing in most
 /// checks (docs/performance.md, session 26).
 const KEEP_LOCAL_BELOW: usize = 64 * 1024;
+
+/// Whether a checked build of `times` source times of `nj` joints keeps its local poses
+/// ([`KEEP_LOCAL_BELOW`]).
+fn keeps_local(nj: usize, times: usize) -> bool {
+    nj * times < KEEP_LOCAL_BELOW
+}
 /// Source times of the first block of [`Eval::build`]'s side-by-side passes (each block after a
 /// passing one twice as long, at most `MAX_TIMES_PER_BLOCK`), and the fewest keys and source
 /// times per chunk of a block (a chunk much shorter costs more in waiting than it saves).
@@ -346,7 +352,7 @@ impl<'a> Eval<'a> {
             // Filled time by time ([`Eval::resample`]): a check that fails early touches little
             // of this memory (a fresh process pays a page fault for every page it touches). A
             // long clip's check leaves the local poses out ([`KEEP_LOCAL_BELOW`]).
-            local_aff: if nj * at.len() < KEEP_LOCAL_BELOW {
+            local_aff: if keeps_local(nj, at.len()) {
                 Vec::with_capacity(nj * at.len())
             } else {
                 Vec::new()
@@ -400,17 +406,13 @@ impl<'a> Eval<'a> {
         // Keys are quantized as the source times reach them (a check that fails early leaves the
         // rest undone); every key is quantized in key order, as a whole pass would.
         let mut next = 0;
-        let keep_local = e.local_aff.capacity() >= e.at.len() * nj;
+        let keep_local = keeps_local(nj, e.at.len());
         let mut local = vec![Affine3A::IDENTITY; if keep_local { 0 } else { nj }];
         for i in 0..e.at.len() {
             let need = e.keys_read_before(i);
             e.requantize_keys(next..need, &mut row);
             next = next.max(need);
-            if keep_local {
-                e.resample(i);
-            } else {
-                e.resample_models(i, &mut local);
-            }
+            e.resample(i, (!keep_local).then_some(&mut local[..]));
             if check {
                 let at = (i - e.first_time) * nj;
                 match e.time_ratio(i, &e.model[at..at + nj]) {
@@ -446,7 +448,7 @@ impl<'a> Eval<'a> {
             let need = self.keys_read_before(t1 - 1);
             self.quantize_keys_side_by_side(next..need.max(next), chunks);
             next = next.max(need);
-            let keep = self.local_aff.capacity() >= times * nj;
+            let keep = keeps_local(self.nj, times);
             let mut local = std::mem::take(&mut self.local_aff);
             let mut model = std::mem::take(&mut self.model);
             if keep {
@@ -666,33 +668,27 @@ impl<'a> Eval<'a> {
         }
     }
 
-    /// Computes every joint's local pose and model transform at source time `i` (parents first).
-    /// While the state is being built, the times are computed in order and each one's transforms
-    /// are appended; after that, they are replaced.
-    fn resample(&mut self, i: usize) {
+    /// Computes every joint's local pose and model transform at source time `i` (parents first),
+    /// the local poses into `scratch` (one row) where the state leaves them out
+    /// ([`KEEP_LOCAL_BELOW`]). While the state is being built, the times are computed in order and
+    /// each one's transforms are appended; after that, they are replaced.
+    fn resample(&mut self, i: usize, scratch: Option<&mut [Affine3A]>) {
         let nj = self.nj;
         let row = (i - self.first_time) * nj;
         if row == self.model.len() {
-            self.local_aff.resize(row + nj, Affine3A::IDENTITY);
             self.model.resize(row + nj, Affine3A::IDENTITY);
+            if scratch.is_none() {
+                self.local_aff.resize(row + nj, Affine3A::IDENTITY);
+            }
         }
         let mut local = std::mem::take(&mut self.local_aff);
         let mut model = std::mem::take(&mut self.model);
-        self.pose_into(i, &mut local[row..row + nj], &mut model[row..row + nj]);
+        let local_row = match scratch {
+            Some(s) => s,
+            None => &mut local[row..row + nj],
+        };
+        self.pose_into(i, local_row, &mut model[row..row + nj]);
         self.local_aff = local;
-        self.model = model;
-    }
-
-    /// [`Eval::resample`] of a state that leaves its local poses out ([`KEEP_LOCAL_BELOW`]):
-    /// the model transforms alone (`local`: one row of scratch space).
-    fn resample_models(&mut self, i: usize, local: &mut [Affine3A]) {
-        let nj = self.nj;
-        let row = (i - self.first_time) * nj;
-        if row == self.model.len() {
-            self.model.resize(row + nj, Affine3A::IDENTITY);
-        }
-        let mut model = std::mem::take(&mut self.model);
-        self.pose_into(i, local, &mut model[row..row + nj]);
         self.model = model;
     }
 
@@ -709,26 +705,23 @@ impl<'a> Eval<'a> {
         local.clear();
         local.resize(times * nj, Affine3A::IDENTITY);
         let state: &Eval = self;
-        // Through `pose_into` (its model transforms into scratch space), so that the local poses
-        // are the ones a build computes and `local_pose` keeps the one caller it is inlined into
-        // (called from here too, it was not, and the Half-Life batch took 2% more CPU).
-        let fill = |(t, row): (usize, &mut [Affine3A]), models: &mut Vec<Affine3A>| {
-            models.resize(nj, Affine3A::IDENTITY);
-            state.pose_into(state.first_time + t, row, models);
+        // Through `pose_into` (its model transforms into one row of scratch space), so that the
+        // local poses are the ones a build computes and `local_pose` keeps the one caller it is
+        // inlined into (called from here too, it was not, and the Half-Life batch took 2% more
+        // CPU). `rows` starts at time `t0`.
+        let fill = |t0: usize, rows: &mut [Affine3A]| {
+            let mut models = vec![Affine3A::IDENTITY; nj];
+            for (t, row) in rows.chunks_mut(nj).enumerate() {
+                state.pose_into(state.first_time + t0 + t, row, &mut models);
+            }
         };
         if times * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
-            let per = MIN_TIMES_PER_CHUNK * nj;
-            local.par_chunks_mut(per).enumerate().for_each(|(c, rows)| {
-                let mut models = Vec::new();
-                for (t, row) in rows.chunks_mut(nj).enumerate() {
-                    fill((c * MIN_TIMES_PER_CHUNK + t, row), &mut models);
-                }
-            });
+            local
+                .par_chunks_mut(MIN_TIMES_PER_CHUNK * nj)
+                .enumerate()
+                .for_each(|(c, rows)| fill(c * MIN_TIMES_PER_CHUNK, rows));
         } else {
-            let mut models = Vec::new();
-            for (t, row) in local.chunks_mut(nj).enumerate() {
-                fill((t, row), &mut models);
-            }
+            fill(0, &mut local);
         }
         self.local_aff = local;
     }

@@ -6,7 +6,7 @@ use super::eval::{Ctx, Eval, PROBES};
 use super::quantize::Layout;
 use super::reduce::Work;
 use super::search::{estimated_candidates, first_state};
-use super::tests::moving_chain;
+use super::tests::{moving_chain, on_threads};
 use sinew_core::glam::Affine3A;
 
 #[test]
@@ -68,11 +68,7 @@ fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from()
         let (_, bits, _) =
             first_state(&ctx, &layout, &work, 0.001, true, true, &mut [None; PROBES]).unwrap();
         let locals = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            on_threads(threads, || {
                 let (mut e, verdict) = Eval::build(
                     &ctx,
                     &layout,
@@ -89,12 +85,7 @@ fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from()
                     let kept = std::mem::take(&mut e.local_aff);
                     assert_eq!(kept.len(), e.model.len(), "a short clip's check keeps them");
                     e.fill_local();
-                    let bits = |v: &[Affine3A]| -> Vec<[u32; 12]> {
-                        v.iter()
-                            .map(|m| m.to_cols_array().map(f32::to_bits))
-                            .collect()
-                    };
-                    assert_eq!(bits(&e.local_aff), bits(&kept));
+                    assert_eq!(bit_patterns(&e.local_aff), bit_patterns(&kept));
                 }
                 e.fill_local();
                 let nj = e.nj;
@@ -106,10 +97,7 @@ fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from()
                         assert_eq!(again.to_cols_array(), model[d].to_cols_array());
                     }
                 }
-                e.local_aff
-                    .iter()
-                    .map(|m| m.to_cols_array().map(f32::to_bits))
-                    .collect::<Vec<_>>()
+                bit_patterns(&e.local_aff)
             })
         };
         let one = locals(1);
@@ -118,4 +106,12 @@ fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from()
             assert_eq!(locals(threads), one, "{joints} x {keys}, {threads} threads");
         }
     }
+}
+
+/// Each transform's twelve floats as bit patterns (for comparisons bit for bit).
+fn bit_patterns(transforms: &[Affine3A]) -> Vec<[u32; 12]> {
+    transforms
+        .iter()
+        .map(|m| m.to_cols_array().map(f32::to_bits))
+        .collect()
 }

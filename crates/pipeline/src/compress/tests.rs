@@ -201,6 +201,15 @@ fn rotations_keep_their_dropped_component_where_two_components_trade_places() {
     assert!(range(&split) < 0.5 * range(&largest));
 }
 
+/// `f` run in a pool of `threads` threads.
+pub(super) fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 /// `clip` compressed with `options` on pools of 1, 2 and 3 threads.
 fn on_1_2_3_threads(
     clip: &Clip,
@@ -209,13 +218,7 @@ fn on_1_2_3_threads(
 ) -> Vec<(Clip, ClipCompressionReport)> {
     [1, 2, 3]
         .into_iter()
-        .map(|threads| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| compress_clip(clip, Some(skeleton), options))
-        })
+        .map(|threads| on_threads(threads, || compress_clip(clip, Some(skeleton), options)))
         .collect()
 }
 
@@ -401,11 +404,7 @@ fn a_long_clip_builds_side_by_side_the_state_and_verdict_of_one_thread() {
         failing,
     ];
     let build = |threads: usize, bits: &Vec<u8>, check: bool| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let (e, verdict) = Eval::build(
                 &ctx,
                 &layout,
@@ -579,12 +578,8 @@ fn a_refinement_side_by_side_finishes_alone_when_the_other_threads_are_busy() {
     let clip = swing_moving(&skeleton, 300, true);
     let options = CompressOptions::peers();
     let alone = on_1_2_3_threads(&clip, &skeleton, &options).swap_remove(0);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
     let done = std::sync::atomic::AtomicBool::new(false);
-    let busy = pool.install(|| {
+    let busy = on_threads(2, || {
         rayon::scope(|scope| {
             scope.spawn(|_| {
                 while !done.load(std::sync::atomic::Ordering::Acquire) {

@@ -7,6 +7,7 @@ use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{Clip, ClipBinding, Sampler, Transform};
 use sinew_import::{gltf, ImportOptions, Location};
 use sinew_scene::Scene;
+use sinew_testdata::gltf_doc::{doc_with_buffer, f32_bytes as f32s};
 use sinew_testdata::{corpus_file, read_corpus};
 
 fn no_resolve(_: &str) -> std::io::Result<Vec<u8>> {
@@ -629,37 +630,6 @@ fn magnum_animation_interpolation() {
 }
 
 // ---------- STEP and sparse-without-bufferView on small hand-written documents ----------
-
-fn b64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut s = String::new();
-    for c in bytes.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for k in 0..4 {
-            if k <= c.len() {
-                s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                s.push('=');
-            }
-        }
-    }
-    s
-}
-
-fn doc_with_buffer(buf: &[u8], rest: &str) -> Vec<u8> {
-    format!(
-        r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],{rest}}}"#,
-        buf.len(),
-        b64(buf)
-    )
-    .into_bytes()
-}
-
-fn f32s(v: &[f32]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
 
 #[test]
 fn sparse_without_buffer_view_is_zeros_plus_patches() {

@@ -50,6 +50,26 @@ pub(super) fn materials(doc: &gltf::Document) -> Vec<Material> {
         .collect()
 }
 
+/// What a primitive's TEXCOORD_0 becomes: its material's base colour texture transform
+/// (KHR_texture_transform: `offset + R(rotation) * (scale * uv)`) baked in, since sinew keeps one
+/// UV set and that texture. gltfpack's quantized texture coordinates (KHR_mesh_quantization) are
+/// integers that this transform maps back to the texture's coordinates. The identity without one.
+fn uv_transform(material: &gltf::Material<'_>) -> impl Fn(Vec2) -> Vec2 {
+    let t = material
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .and_then(|info| info.texture_transform())
+        .map(|t| (Vec2::from(t.offset()), t.rotation(), Vec2::from(t.scale())));
+    move |uv| match t {
+        None => uv,
+        Some((offset, rotation, scale)) => {
+            let (sin, cos) = rotation.sin_cos();
+            let s = uv * scale;
+            offset + Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y)
+        }
+    }
+}
+
 /// The meshes to import: (node index or None, mesh) in scene order.
 pub(super) fn mesh_instances<'a>(
     doc: &'a gltf::Document,
@@ -279,7 +299,12 @@ pub(super) fn import_meshes(
                 Some(acc) => {
                     check_count(&acc, "TEXCOORD_0")?;
                     let v = floats(file, l, &acc, 2, &format!("{pp}.attributes.TEXCOORD_0"))?;
-                    Some(v.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect())
+                    let transform = uv_transform(&prim.material());
+                    Some(
+                        v.chunks_exact(2)
+                            .map(|c| transform(Vec2::new(c[0], c[1])))
+                            .collect(),
+                    )
                 }
                 None => None,
             };

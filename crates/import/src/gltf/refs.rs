@@ -79,6 +79,25 @@ fn texture_info(v: Option<&Value>, path: impl Fn() -> String, c: &Counts) -> Res
 
 /// Checks the document; the first problem found, in document order.
 pub(super) fn check(root: &Value) -> Result<(), Problem> {
+    // A glTF 1.0 document fails everywhere in 2.0's terms (its `scene` is a name, its meshes refer
+    // to accessors by id): say what it is instead of the first of those.
+    // Some 1.0 exporters wrote the version as a number.
+    let version = root.pointer("/asset/version").and_then(|v| match v {
+        Value::String(s) => Some(s.clone()),
+        Value::Number(n) => Some(n.to_string()),
+        _ => None,
+    });
+    if let Some(version) = version {
+        if version.split('.').next() != Some("2") {
+            return Err((
+                "asset.version".into(),
+                format!(
+                    "glTF {version:?} is not supported; sinew reads glTF 2.0 \
+                     (convert the file to glTF 2.0 first)"
+                ),
+            ));
+        }
+    }
     let c = Counts {
         accessors: len(root, "accessors"),
         buffer_views: len(root, "bufferViews"),
@@ -401,5 +420,24 @@ mod tests {
             let (p, m) = check(&d).unwrap_err();
             assert_eq!(p, path, "{m}");
         }
+    }
+
+    #[test]
+    fn a_gltf_1_document_is_named_as_such() {
+        let mut d = doc();
+        // glTF 1.0's scene is a name, which 2.0's terms would report as a bad index.
+        d["scene"] = json!("defaultScene");
+        d["asset"]["version"] = json!("1.0");
+        let (p, m) = check(&d).unwrap_err();
+        assert_eq!(p, "asset.version");
+        assert!(m.contains("glTF \"1.0\" is not supported"), "{m}");
+        d["asset"]["version"] = json!(1);
+        let (p, m) = check(&d).unwrap_err();
+        assert_eq!(p, "asset.version");
+        assert!(m.contains("glTF \"1\" is not supported"), "{m}");
+        d["asset"]["version"] = json!("2.1");
+        d["scene"] = json!(0);
+        d["scenes"] = json!([{"nodes": [0]}]);
+        assert_eq!(check(&d), Ok(()));
     }
 }

@@ -174,7 +174,7 @@ pub(super) fn offset_of(text: &[u8], line: usize, column: usize) -> usize {
 
 /// Required extensions the importer reads itself (its own accessor reader), taken out of
 /// `extensionsRequired` before the gltf crate validates the document.
-const READ_HERE: [&str; 1] = ["KHR_mesh_quantization"];
+const READ_HERE: [&str; 2] = ["KHR_mesh_quantization", super::meshopt::EXTENSION];
 
 pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, ImportError> {
     if json.starts_with(b"glTF") {
@@ -315,10 +315,30 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
     };
     let gltf = parse_document(file, json)?;
     let doc = gltf.document;
+    // EXT_meshopt_compression: the views it compresses are decoded below, into buffers that may
+    // have no data of their own (fallback buffers).
+    let meshopt_root: Option<serde_json::Value> = if doc
+        .extensions_used()
+        .any(|e| e == super::meshopt::EXTENSION)
+    {
+        serde_json::from_slice(json).ok()
+    } else {
+        None
+    };
+    let fallback = meshopt_root
+        .as_ref()
+        .map(super::meshopt::fallback_buffers)
+        .unwrap_or_default();
+    let mut input_bytes = bytes.len();
     let mut buffers = Vec::new();
     for b in doc.buffers() {
         let path = format!("buffers[{}]", b.index());
         let data: Vec<u8> = match b.source() {
+            gltf::buffer::Source::Bin if fallback.contains(&b.index()) && b.index() != 0 => {
+                // Sized and filled by the decoding below.
+                buffers.push(Vec::new());
+                continue;
+            }
             gltf::buffer::Source::Bin => {
                 if b.index() != 0 {
                     return Err(at(
@@ -365,7 +385,14 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
         }
         let mut data = data;
         data.truncate(b.length());
+        if !matches!(b.source(), gltf::buffer::Source::Bin) {
+            input_bytes = input_bytes.saturating_add(data.len());
+        }
         buffers.push(data);
+    }
+    if let Some(root) = &meshopt_root {
+        super::meshopt::decode_views(root, &mut buffers, &fallback, input_bytes)
+            .map_err(|(path, message)| at(file, path, message))?;
     }
     Ok(Loaded { doc, buffers })
 }

@@ -1,7 +1,9 @@
 //! glTF 2.0 importer (`.gltf` with external or data-URI buffers, and `.glb`).
 //!
-//! The JSON is parsed and validated by the gltf crate's document model ([`gltf::Gltf::from_slice`]);
-//! the GLB container, buffers and accessors are read by this module with every byte range checked
+//! The JSON is parsed and validated by the gltf crate's document model ([`gltf::Document::from_json`],
+//! after the extensions read here, KHR_mesh_quantization and EXT_meshopt_compression, are taken out
+//! of `extensionsRequired`); the GLB container, buffers (meshopt-compressed views decoded) and
+//! accessors are read by this module with every byte range checked
 //! (see [`accessor`]). One skin becomes the scene skeleton ([`crate::ImportOptions::gltf_skin`]); animations
 //! become linear-key clips ([`anim`]). docs/formats/gltf.md describes every decision.
 
@@ -11,6 +13,7 @@ mod animation;
 mod build;
 mod document;
 mod mesh;
+mod meshopt;
 mod refs;
 mod skin;
 

@@ -527,3 +527,28 @@ fn mutated_half_life_files_never_panic() {
         }
     }
 }
+
+#[test]
+fn a_texture_file_converted_alone_says_which_model_to_convert() {
+    let (Some(textures), Some(model)) = (import("mdl/manT.mdl"), import("mdl/man.mdl")) else {
+        return;
+    };
+    // manT.mdl: five textures (header byte 180), no bone, sequence or body part.
+    assert!(textures.skeleton.is_none() && textures.meshes.is_empty() && textures.clips.is_empty());
+    let warning = textures
+        .diagnostics
+        .iter()
+        .find(|d| d.code == "mdl-textures-only")
+        .expect("a warning for a texture file");
+    assert!(
+        warning.message.contains("holds 5 textures")
+            && warning.message.ends_with("convert man.mdl"),
+        "{}",
+        warning.message
+    );
+    // The model that reads it gets no such warning.
+    assert!(model
+        .diagnostics
+        .iter()
+        .all(|d| d.code != "mdl-textures-only"));
+}

@@ -185,6 +185,33 @@ fn check_length(f: &Bytes) -> Result<(), ImportError> {
     Ok(())
 }
 
+/// A warning when the file holds textures and nothing else (no bone, sequence or body part): a
+/// model's texture file (`NAMET.mdl`), which is read with its model; converted alone it has
+/// nothing to convert, and the warning says which file to convert instead.
+fn textures_only(f: &Bytes) -> Result<Option<Diagnostic>, ImportError> {
+    let count = |at: usize| f.i32("header", at);
+    let (bones, sequences, textures, bodyparts) =
+        (count(140)?, count(164)?, count(180)?, count(204)?);
+    if bones != 0 || sequences != 0 || bodyparts != 0 || textures <= 0 {
+        return Ok(None);
+    }
+    let base = f.file.rsplit(['/', '\\']).next().unwrap_or(f.file);
+    let stem = base.rsplit_once('.').map_or(base, |(s, _)| s);
+    let model = match stem.strip_suffix(['T', 't']) {
+        Some(m) if !m.is_empty() => format!("{m}.mdl"),
+        _ => "its model".to_string(),
+    };
+    Ok(Some(
+        Diagnostic::warning(
+            "mdl-textures-only",
+            format!(
+                "the file holds {textures} textures and no bone, sequence or body part: a model's texture file, which the model reads; convert {model}"
+            ),
+        )
+        .with_figure("textures", f64::from(textures)),
+    ))
+}
+
 /// The companion file names of a model file: `<stem>T.mdl` and the sequence group files.
 pub fn texture_companion(file: &str) -> String {
     let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
@@ -224,6 +251,9 @@ pub fn read(
     f.get("header", 0, HEADER_SIZE)?;
     check_length(&f)?;
     let mut diagnostics = Vec::new();
+    if let Some(d) = textures_only(&f)? {
+        diagnostics.push(d);
+    }
     let mut model = StudioModel::default();
     let eye = f.vec3("header", 76)?;
     model.eye_position = Some(eye);

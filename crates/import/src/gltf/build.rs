@@ -43,6 +43,7 @@ pub(super) fn import_inner(
     let l = load(file, bytes, resolve)?;
     let doc = &l.doc;
     let mut scene = Scene::new(SourceFormat::Gltf);
+    scene.diagnostics.extend(l.warnings.iter().cloned());
     let g = graph(file, doc, &mut scene.diagnostics)?;
 
     // The skeleton: the chosen skin, or the whole node forest when there is no skin but animations.

@@ -3,11 +3,14 @@
 
 use super::accessor::{read_f32, read_u32};
 use crate::{ImportError, Resolver};
+use sinew_scene::Diagnostic;
 
 /// A parsed document with its buffers loaded and checked.
 pub(super) struct Loaded {
     pub(super) doc: gltf::Document,
     pub(super) buffers: Vec<Vec<u8>>,
+    /// What the document lacks and was read without (`parse_document`).
+    pub(super) warnings: Vec<Diagnostic>,
 }
 
 /// Splits a GLB container into its JSON chunk and optional BIN chunk, checking every length.
@@ -176,7 +179,46 @@ pub(super) fn offset_of(text: &[u8], line: usize, column: usize) -> usize {
 /// `extensionsRequired` before the gltf crate validates the document.
 const READ_HERE: [&str; 2] = ["KHR_mesh_quantization", super::meshopt::EXTENSION];
 
-pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, ImportError> {
+/// Gives the POSITION accessors without `min` or `max` (which the specification requires and the
+/// gltf crate's validation refuses, but which sinew never reads: it reads the data itself) bounds
+/// of zero, so that such a file is read; returns their indices, for a warning.
+fn fill_missing_position_bounds(root: &mut gltf::json::Root) -> Vec<usize> {
+    let mut positions: Vec<usize> = root
+        .meshes
+        .iter()
+        .flat_map(|m| &m.primitives)
+        .filter_map(|p| {
+            p.attributes
+                .get(&gltf::json::validation::Checked::Valid(
+                    gltf::json::mesh::Semantic::Positions,
+                ))
+                .map(|i| i.value())
+        })
+        .collect();
+    positions.sort_unstable();
+    positions.dedup();
+    let mut filled = Vec::new();
+    for i in positions {
+        let Some(a) = root.accessors.get_mut(i) else {
+            continue;
+        };
+        if a.min.is_none() || a.max.is_none() {
+            let zero = || Some(serde_json::json!([0.0, 0.0, 0.0]));
+            a.min = a.min.take().or_else(zero);
+            a.max = a.max.take().or_else(zero);
+            filled.push(i);
+        }
+    }
+    filled
+}
+
+/// The document, and the warnings of what it lacks and is read without.
+pub(super) struct Parsed {
+    pub(super) gltf: gltf::Gltf,
+    pub(super) warnings: Vec<Diagnostic>,
+}
+
+pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportError> {
     if json.starts_with(b"glTF") {
         return Err(ImportError::in_section(file, "json", "nested GLB header"));
     }
@@ -201,11 +243,13 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, Impo
             }
         }
     }
+    let mut unbounded = Vec::new();
     let parsed = crate::guard::contain(|| {
         let mut root: gltf::json::Root = gltf::json::deserialize::from_slice(json)?;
         // Extensions sinew reads itself (the crate's validation refuses any it does not know).
         root.extensions_required
             .retain(|e| !READ_HERE.contains(&e.as_str()));
+        unbounded = fill_missing_position_bounds(&mut root);
         gltf::Document::from_json(root).map(|document| gltf::Gltf {
             document,
             blob: None,
@@ -218,47 +262,66 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<gltf::Gltf, Impo
             format!("the gltf crate panicked while validating ({m})"),
         )
     })?;
-    parsed.map_err(|e| match e {
-        gltf::Error::Deserialize(de) => {
-            let off = offset_of(json, de.line(), de.column());
-            let mut path = json_path_at(json, off);
-            // serde notices a missing field at the end of its object, after the last key it read.
-            if de.to_string().starts_with("missing field") {
-                if let Some(dot) = path.rfind('.') {
-                    if !path[dot..].contains('[') {
-                        path.truncate(dot);
+    let warnings = if unbounded.is_empty() {
+        Vec::new()
+    } else {
+        let list: Vec<String> = unbounded
+            .iter()
+            .map(|i| format!("accessors[{i}]"))
+            .collect();
+        vec![Diagnostic::warning(
+            "gltf-position-bounds-missing",
+            format!(
+                "{} {} no min/max, which glTF requires of POSITION; read without them (sinew reads the data itself)",
+                list.join(", "),
+                if list.len() == 1 { "has" } else { "have" }
+            ),
+        )
+        .with_figure("accessors", unbounded.len() as f64)]
+    };
+    parsed
+        .map(|gltf| Parsed { gltf, warnings })
+        .map_err(|e| match e {
+            gltf::Error::Deserialize(de) => {
+                let off = offset_of(json, de.line(), de.column());
+                let mut path = json_path_at(json, off);
+                // serde notices a missing field at the end of its object, after the last key it read.
+                if de.to_string().starts_with("missing field") {
+                    if let Some(dot) = path.rfind('.') {
+                        if !path[dot..].contains('[') {
+                            path.truncate(dot);
+                        }
                     }
                 }
+                at(file, path, format!("{de}"))
             }
-            at(file, path, format!("{de}"))
-        }
-        gltf::Error::Validation(errors) => {
-            // A required extension sinew does not read explains the rest (a Draco-compressed
-            // mesh's accessors have no buffer views): it is reported first.
-            let first = errors
-                .iter()
-                .find(|(p, _)| p.to_string().starts_with("extensionsRequired"))
-                .or(errors.first());
-            let (path, kind) = match first {
-                Some((p, k)) => (p.to_string(), format!("{k}")),
-                None => ("(root)".into(), "invalid".into()),
-            };
-            let more = if errors.len() > 1 {
-                format!(" ({} more validation errors)", errors.len() - 1)
-            } else {
-                String::new()
-            };
-            let required = path.starts_with("extensionsRequired");
-            let hint = if required {
-                "; sinew reads KHR_mesh_quantization and the core glTF 2.0 \
+            gltf::Error::Validation(errors) => {
+                // A required extension sinew does not read explains the rest (a Draco-compressed
+                // mesh's accessors have no buffer views): it is reported first.
+                let first = errors
+                    .iter()
+                    .find(|(p, _)| p.to_string().starts_with("extensionsRequired"))
+                    .or(errors.first());
+                let (path, kind) = match first {
+                    Some((p, k)) => (p.to_string(), format!("{k}")),
+                    None => ("(root)".into(), "invalid".into()),
+                };
+                let more = if errors.len() > 1 {
+                    format!(" ({} more validation errors)", errors.len() - 1)
+                } else {
+                    String::new()
+                };
+                let required = path.starts_with("extensionsRequired");
+                let hint = if required {
+                    "; sinew reads KHR_mesh_quantization and the core glTF 2.0 \
                  (docs/formats/gltf.md): decompress the file first"
-            } else {
-                ""
-            };
-            at(file, path, format!("{kind}{hint}{more}"))
-        }
-        other => ImportError::in_section(file, "json", other.to_string()),
-    })
+                } else {
+                    ""
+                };
+                at(file, path, format!("{kind}{hint}{more}"))
+            }
+            other => ImportError::in_section(file, "json", other.to_string()),
+        })
 }
 
 /// Decodes standard or URL-safe base64, ignoring whitespace and padding.
@@ -313,7 +376,7 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
     } else {
         (bytes, None)
     };
-    let gltf = parse_document(file, json)?;
+    let Parsed { gltf, warnings } = parse_document(file, json)?;
     let doc = gltf.document;
     // EXT_meshopt_compression: the views it compresses are decoded below, into buffers that may
     // have no data of their own (fallback buffers).
@@ -394,7 +457,11 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
         super::meshopt::decode_views(root, &mut buffers, &fallback, input_bytes)
             .map_err(|(path, message)| at(file, path, message))?;
     }
-    Ok(Loaded { doc, buffers })
+    Ok(Loaded {
+        doc,
+        buffers,
+        warnings,
+    })
 }
 
 /// Largest image [`embedded_images`] returns.
@@ -458,7 +525,11 @@ pub fn skin_count(file_name: &str, bytes: &[u8]) -> Result<usize, ImportError> {
     } else {
         bytes
     };
-    Ok(parse_document(file_name, json)?.document.skins().count())
+    Ok(parse_document(file_name, json)?
+        .gltf
+        .document
+        .skins()
+        .count())
 }
 
 /// Reads an accessor as floats with exactly `comps` components per element.

@@ -218,6 +218,21 @@ pub(super) struct Parsed {
     pub(super) warnings: Vec<Diagnostic>,
 }
 
+/// A JSON error (syntax or type) at the JSON path of the line and column serde gives.
+fn json_error(file: &str, json: &[u8], de: &serde_json::Error) -> ImportError {
+    let off = offset_of(json, de.line(), de.column());
+    let mut path = json_path_at(json, off);
+    // serde notices a missing field at the end of its object, after the last key it read.
+    if de.to_string().starts_with("missing field") {
+        if let Some(dot) = path.rfind('.') {
+            if !path[dot..].contains('[') {
+                path.truncate(dot);
+            }
+        }
+    }
+    at(file, path, format!("{de}"))
+}
+
 pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportError> {
     if json.starts_with(b"glTF") {
         return Err(ImportError::in_section(file, "json", "nested GLB header"));
@@ -231,7 +246,7 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
         // serde_json skips the keys gltf-json does not know without checking their UTF-8, so a
         // document that is not UTF-8 would reach the crate unchecked (the fuzzer found one that then
         // panicked in mesh.rs): glTF JSON must be UTF-8, refuse it here.
-        Err(_) => {
+        Err(value_error) => {
             if let Err(e) = std::str::from_utf8(json) {
                 let off = e.valid_up_to();
                 return Err(ImportError::at_offset(
@@ -241,6 +256,11 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
                     "JSON is not UTF-8",
                 ));
             }
+            // Nor is a document that is not JSON passed on: gltf-json skips the values of keys it
+            // does not know without reading them whole (a number past f64's range in an unknown
+            // key passed), so the checks above would be skipped and the crate could reach a panic
+            // they prevent (the fuzzer found one: no `accessors`, then POSITION 1).
+            return Err(json_error(file, json, &value_error));
         }
     }
     let mut unbounded = Vec::new();
@@ -282,19 +302,7 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
     parsed
         .map(|gltf| Parsed { gltf, warnings })
         .map_err(|e| match e {
-            gltf::Error::Deserialize(de) => {
-                let off = offset_of(json, de.line(), de.column());
-                let mut path = json_path_at(json, off);
-                // serde notices a missing field at the end of its object, after the last key it read.
-                if de.to_string().starts_with("missing field") {
-                    if let Some(dot) = path.rfind('.') {
-                        if !path[dot..].contains('[') {
-                            path.truncate(dot);
-                        }
-                    }
-                }
-                at(file, path, format!("{de}"))
-            }
+            gltf::Error::Deserialize(de) => json_error(file, json, &de),
             gltf::Error::Validation(errors) => {
                 // A required extension sinew does not read explains the rest (a Draco-compressed
                 // mesh's accessors have no buffer views): it is reported first.

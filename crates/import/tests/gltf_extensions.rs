@@ -150,3 +150,46 @@ fn a_gltf_1_file_is_named_as_such() {
     );
     assert!(e.message.contains("glTF \"1.0\" is not supported"), "{e}");
 }
+
+/// A float triangle with two UV sets (set 0: all zeros; set 1: (0.1, 0.2), (0.3, 0.4),
+/// (0.5, 0.6)) whose material's base colour texture has `texture_info` (JSON members).
+fn two_uv_sets(texture_info: &str) -> Vec<u8> {
+    let mut buf = f32_bytes(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    buf.extend(f32_bytes(&[0.0; 6]));
+    buf.extend(f32_bytes(&[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]));
+    let json = format!(
+        r#""extensionsUsed":["KHR_texture_transform"],
+        "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},{{"buffer":0,"byteOffset":60,"byteLength":24}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+          {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}},{{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}}],
+        "images":[{{"uri":"skin.png"}}],"textures":[{{"source":0}}],
+        "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0{texture_info}}}}}}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}]"#
+    );
+    doc_with_buffer(&buf, &json)
+}
+
+#[test]
+fn the_uv_set_is_the_one_the_base_colour_texture_reads() {
+    let set1 = [
+        Vec2::new(0.1, 0.2),
+        Vec2::new(0.3, 0.4),
+        Vec2::new(0.5, 0.6),
+    ];
+    let read = |info: &str| {
+        let doc = two_uv_sets(info);
+        gltf::import("uv.gltf", &doc, &no_resolve, &ImportOptions::default()).unwrap()
+    };
+    // Set 0 by default, set 1 by `texCoord`, and by the texture transform's override.
+    assert_eq!(read("").meshes[0].geometry.uvs, [Vec2::ZERO; 3]);
+    assert_eq!(read(r#","texCoord":1"#).meshes[0].geometry.uvs, set1);
+    let overridden = read(r#","extensions":{"KHR_texture_transform":{"texCoord":1}}"#);
+    assert_eq!(overridden.meshes[0].geometry.uvs, set1);
+    // A set the primitive does not have: set 0, with a warning.
+    let missing = read(r#","texCoord":3"#);
+    assert_eq!(missing.meshes[0].geometry.uvs, [Vec2::ZERO; 3]);
+    assert!(missing
+        .diagnostics
+        .iter()
+        .any(|d| d.code == "gltf-texcoord-missing" && d.message.contains("TEXCOORD_3")));
+}

@@ -70,6 +70,19 @@ fn uv_transform(material: &gltf::Material<'_>) -> impl Fn(Vec2) -> Vec2 {
     }
 }
 
+/// The texture coordinate set a material's base colour texture reads: its KHR_texture_transform
+/// `texCoord` override, else its `texCoord` (0 without a texture).
+fn uv_set(material: &gltf::Material<'_>) -> u32 {
+    material
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .map_or(0, |info| {
+            info.texture_transform()
+                .and_then(|t| t.tex_coord())
+                .unwrap_or(info.tex_coord())
+        })
+}
+
 /// The meshes to import: (node index or None, mesh) in scene order.
 pub(super) fn mesh_instances<'a>(
     doc: &'a gltf::Document,
@@ -295,10 +308,27 @@ pub(super) fn import_meshes(
                     generate_normals(&positions, &tris).0
                 }
             };
-            let uvs: Option<Vec<Vec2>> = match prim.get(&gltf::Semantic::TexCoords(0)) {
+            // The set the base colour texture reads (its `texCoord`, or its transform's).
+            let set = uv_set(&prim.material());
+            let set = if set != 0 && prim.get(&gltf::Semantic::TexCoords(set)).is_none() {
+                scene.diagnostics.push(
+                    Diagnostic::warning(
+                        "gltf-texcoord-missing",
+                        format!(
+                            "{pp}: its material's base colour texture reads TEXCOORD_{set}, which the primitive lacks; TEXCOORD_0 read instead"
+                        ),
+                    )
+                    .with_figure("set", f64::from(set)),
+                );
+                0
+            } else {
+                set
+            };
+            let uvs: Option<Vec<Vec2>> = match prim.get(&gltf::Semantic::TexCoords(set)) {
                 Some(acc) => {
-                    check_count(&acc, "TEXCOORD_0")?;
-                    let v = floats(file, l, &acc, 2, &format!("{pp}.attributes.TEXCOORD_0"))?;
+                    let name = format!("TEXCOORD_{set}");
+                    check_count(&acc, &name)?;
+                    let v = floats(file, l, &acc, 2, &format!("{pp}.attributes.{name}"))?;
                     let transform = uv_transform(&prim.material());
                     Some(
                         v.chunks_exact(2)

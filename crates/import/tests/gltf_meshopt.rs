@@ -134,6 +134,24 @@ fn compressed_views_decode_to_the_data_they_stand_for() {
 }
 
 #[test]
+fn a_fallback_buffer_may_come_first() {
+    // The same document with its two buffers swapped: the fallback (no data) is buffer 0.
+    let doc = String::from_utf8(two_triangles("TRIANGLES")).unwrap();
+    let start = doc.find(r#""buffers":["#).unwrap() + r#""buffers":["#.len();
+    let end = doc[start..].find("],").unwrap() + start;
+    let split = doc[start..end].find(r#"},{"byteLength""#).unwrap() + start + 1;
+    let (data, fallback) = (&doc[start..split], &doc[split + 1..end]);
+    let swapped = format!("{}{fallback},{data}{}", &doc[..start], &doc[end..])
+        .replace(r#""buffer":1"#, r#""buffer":X"#)
+        .replace(r#""buffer":0"#, r#""buffer":1"#)
+        .replace(r#""buffer":X"#, r#""buffer":0"#);
+    let s = import(swapped.as_bytes());
+    let expected: Vec<Vec3> = POSITIONS.iter().map(|p| Vec3::from_array(*p)).collect();
+    assert_eq!(s.meshes[0].geometry.positions, expected);
+    assert_eq!(s.meshes[0].geometry.indices, INDICES);
+}
+
+#[test]
 fn filtered_views_decode_to_within_their_encoding() {
     // Normals through the octahedral filter (8 bits, stride 4), positions through the exponential
     // one (stride 12): what gltfpack -cc writes.

@@ -405,7 +405,10 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
     for b in doc.buffers() {
         let path = format!("buffers[{}]", b.index());
         let data: Vec<u8> = match b.source() {
-            gltf::buffer::Source::Bin if fallback.contains(&b.index()) && b.index() != 0 => {
+            // (Buffer 0 without a URI is the GLB's BIN chunk when there is one.)
+            gltf::buffer::Source::Bin
+                if fallback.contains(&b.index()) && (b.index() != 0 || bin.is_none()) =>
+            {
                 // Sized and filled by the decoding below.
                 buffers.push(Vec::new());
                 continue;

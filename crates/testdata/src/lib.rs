@@ -1,4 +1,6 @@
-//! sinew-testdata tells tests where the shared corpus and the committed fixtures are.
+//! sinew-testdata tells tests where the shared corpus and the committed fixtures are, measures
+//! geometry independently of the code under test ([`geometry`]) and writes small glTF documents
+//! whose every value a test states ([`gltf_doc`]).
 //!
 //! The corpus is found through `SINEW_CORPUS`, else `../shared/corpus` beside the workspace root. When it
 //! is missing, [`corpus`] returns `None` so tests can say so and skip, except under CI (`CI` set), where

@@ -46,14 +46,21 @@ fn replay(target: &str, format: Format, name: &str) -> Vec<(String, Result<usize
     out
 }
 
+/// The error of one regression file of `target` (replayed with the others, as `name`).
+fn error_of(target: &str, format: Format, name: &str, file: &str) -> String {
+    let results = replay(target, format, name);
+    let (_, result) = results.into_iter().find(|(f, _)| f == file).unwrap();
+    result.unwrap_err()
+}
+
 #[test]
 fn an_mdl_without_bones_declaring_two_billion_frames_is_refused_before_allocating() {
-    let errors = replay("mdl", Format::Mdl, "m.mdl");
-    let (_, result) = errors
-        .iter()
-        .find(|(f, _)| f == "no_bones_two_billion_frames.mdl")
-        .unwrap();
-    let e = result.as_ref().unwrap_err();
+    let e = error_of(
+        "mdl",
+        Format::Mdl,
+        "m.mdl",
+        "no_bones_two_billion_frames.mdl",
+    );
     assert!(e.contains("more animation than sinew reads"), "{e}");
     assert!(e.contains("sequences["), "{e}");
 }
@@ -74,15 +81,8 @@ fn a_qc_sequence_option_that_is_not_utf8_is_read_as_an_option() {
 fn a_gltf_with_a_key_that_is_not_utf8_is_refused_before_the_gltf_crate_sees_it() {
     // An unknown key with byte 0xFF, and a POSITION accessor that does not exist: gltf-json skipped the
     // key unchecked and then panicked on the index.
-    let results = replay("gltf", Format::Gltf, "m.gltf");
-    let (_, result) = results
-        .iter()
-        .find(|(f, _)| f == "unknown_key_not_utf8.gltf")
-        .unwrap();
-    assert_eq!(
-        result.as_ref().unwrap_err(),
-        "m.gltf: json at byte 65: JSON is not UTF-8"
-    );
+    let e = error_of("gltf", Format::Gltf, "m.gltf", "unknown_key_not_utf8.gltf");
+    assert_eq!(e, "m.gltf: json at byte 65: JSON is not UTF-8");
 }
 
 #[test]
@@ -91,12 +91,8 @@ fn a_gltf_with_a_number_past_f64_in_an_unknown_key_is_refused_before_the_gltf_cr
     // unknown key without reading the number, sinew's own pass (serde_json::Value) failed on it and
     // was skipped, and gltf-json panicked on the index (found by the glb target from gltfpack -c
     // seeds, session 27; minimised by hand).
-    let results = replay("gltf", Format::Gltf, "m.gltf");
-    let (_, result) = results
-        .iter()
-        .find(|(f, _)| f == "number_out_of_range_in_unknown_key.gltf")
-        .unwrap();
-    let e = result.as_ref().unwrap_err();
+    let file = "number_out_of_range_in_unknown_key.gltf";
+    let e = error_of("gltf", Format::Gltf, "m.gltf", file);
     assert!(
         e.starts_with("m.gltf: nodes at nodes[0].extent: number out of range"),
         "{e}"

@@ -7,12 +7,8 @@ use sinew_core::glam::{Mat4, Quat, Vec3};
 use sinew_core::{Clip, ClipBinding, Sampler, Transform};
 use sinew_import::{gltf, ImportOptions, Location};
 use sinew_scene::Scene;
-use sinew_testdata::gltf_doc::{doc_with_buffer, f32_bytes as f32s};
+use sinew_testdata::gltf_doc::{doc_with_buffer, f32_bytes as f32s, no_resolve};
 use sinew_testdata::{corpus_file, read_corpus};
-
-fn no_resolve(_: &str) -> std::io::Result<Vec<u8>> {
-    Err(std::io::Error::other("no external files in this test"))
-}
 
 fn import(rel: &str) -> Option<Scene> {
     let path = corpus_file(&format!("gltf/{rel}"))?;

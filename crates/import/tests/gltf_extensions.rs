@@ -4,11 +4,7 @@
 
 use sinew_core::glam::{Vec2, Vec3};
 use sinew_import::{gltf, ImportOptions, Location};
-use sinew_testdata::gltf_doc::{doc_with_buffer, f32_bytes};
-
-fn no_resolve(_: &str) -> std::io::Result<Vec<u8>> {
-    Err(std::io::Error::other("no external files in this test"))
-}
+use sinew_testdata::gltf_doc::{doc_with_buffer, f32_bytes, no_resolve};
 
 fn u16s(v: &[u16]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()

@@ -7,11 +7,7 @@
 use sinew_core::glam::Vec3;
 use sinew_import::{gltf, ImportOptions, Location};
 use sinew_scene::Scene;
-use sinew_testdata::gltf_doc::base64;
-
-fn no_resolve(_: &str) -> std::io::Result<Vec<u8>> {
-    Err(std::io::Error::other("no external files in this test"))
-}
+use sinew_testdata::gltf_doc::{base64, no_resolve};
 
 /// One compressed view: its encoded bytes and its extension's fields.
 struct View {

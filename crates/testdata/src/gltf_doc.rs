@@ -36,3 +36,8 @@ pub fn doc_with_buffer(buf: &[u8], rest: &str) -> Vec<u8> {
 pub fn f32_bytes(v: &[f32]) -> Vec<u8> {
     v.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
+
+/// A resolver for documents that have no files beside them: every request fails.
+pub fn no_resolve(_: &str) -> std::io::Result<Vec<u8>> {
+    Err(std::io::Error::other("no external files in this test"))
+}

@@ -216,6 +216,9 @@ fn fill_missing_position_bounds(root: &mut gltf::json::Root) -> Vec<usize> {
 pub(super) struct Parsed {
     pub(super) gltf: gltf::Gltf,
     pub(super) warnings: Vec<Diagnostic>,
+    /// The document as JSON values when it uses EXT_meshopt_compression (whose views are
+    /// decoded from it, [`super::meshopt`]); kept from sinew's own pass rather than parsed again.
+    pub(super) meshopt_json: Option<serde_json::Value>,
 }
 
 /// A JSON error (syntax or type) at the JSON path of the line and column serde gives.
@@ -239,9 +242,14 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
     }
     // Our own pass first: indices the crate follows and enumerations it unwraps, which gltf-json
     // 1.4.1 can panic on instead of reporting (docs/reliability.md).
-    match serde_json::from_slice::<serde_json::Value>(json) {
+    let meshopt_json = match serde_json::from_slice::<serde_json::Value>(json) {
         Ok(value) => {
             super::refs::check(&value).map_err(|(path, message)| at(file, path, message))?;
+            let uses_meshopt = value
+                .get("extensionsUsed")
+                .and_then(serde_json::Value::as_array)
+                .is_some_and(|used| used.iter().any(|e| e == super::meshopt::EXTENSION));
+            uses_meshopt.then_some(value)
         }
         // serde_json skips the keys gltf-json does not know without checking their UTF-8, so a
         // document that is not UTF-8 would reach the crate unchecked (the fuzzer found one that then
@@ -262,7 +270,7 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
             // they prevent (the fuzzer found one: no `accessors`, then POSITION 1).
             return Err(json_error(file, json, &value_error));
         }
-    }
+    };
     let mut unbounded = Vec::new();
     let parsed = crate::guard::contain(|| {
         let mut root: gltf::json::Root = gltf::json::deserialize::from_slice(json)?;
@@ -300,7 +308,11 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
         .with_figure("accessors", unbounded.len() as f64)]
     };
     parsed
-        .map(|gltf| Parsed { gltf, warnings })
+        .map(|gltf| Parsed {
+            gltf,
+            warnings,
+            meshopt_json,
+        })
         .map_err(|e| match e {
             gltf::Error::Deserialize(de) => json_error(file, json, &de),
             gltf::Error::Validation(errors) => {
@@ -384,19 +396,15 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
     } else {
         (bytes, None)
     };
-    let Parsed { gltf, warnings } = parse_document(file, json)?;
+    let Parsed {
+        gltf,
+        warnings,
+        meshopt_json,
+    } = parse_document(file, json)?;
     let doc = gltf.document;
     // EXT_meshopt_compression: the views it compresses are decoded below, into buffers that may
     // have no data of their own (fallback buffers).
-    let meshopt_root: Option<serde_json::Value> = if doc
-        .extensions_used()
-        .any(|e| e == super::meshopt::EXTENSION)
-    {
-        serde_json::from_slice(json).ok()
-    } else {
-        None
-    };
-    let fallback = meshopt_root
+    let fallback = meshopt_json
         .as_ref()
         .map(super::meshopt::fallback_buffers)
         .unwrap_or_default();
@@ -464,7 +472,7 @@ pub(super) fn load(file: &str, bytes: &[u8], resolve: Resolver<'_>) -> Result<Lo
         }
         buffers.push(data);
     }
-    if let Some(root) = &meshopt_root {
+    if let Some(root) = &meshopt_json {
         super::meshopt::decode_views(root, &mut buffers, &fallback, input_bytes)
             .map_err(|(path, message)| at(file, path, message))?;
     }

@@ -50,37 +50,32 @@ pub(super) fn materials(doc: &gltf::Document) -> Vec<Material> {
         .collect()
 }
 
-/// What a primitive's TEXCOORD_0 becomes: its material's base colour texture transform
-/// (KHR_texture_transform: `offset + R(rotation) * (scale * uv)`) baked in, since sinew keeps one
-/// UV set and that texture. gltfpack's quantized texture coordinates (KHR_mesh_quantization) are
-/// integers that this transform maps back to the texture's coordinates. The identity without one.
-fn uv_transform(material: &gltf::Material<'_>) -> impl Fn(Vec2) -> Vec2 {
-    let t = material
-        .pbr_metallic_roughness()
-        .base_color_texture()
-        .and_then(|info| info.texture_transform())
-        .map(|t| (Vec2::from(t.offset()), t.rotation(), Vec2::from(t.scale())));
-    move |uv| match t {
+/// The UVs of a material's base colour texture, the one texture (and so the one UV set) sinew
+/// keeps: the set it reads (its KHR_texture_transform `texCoord` override, else its `texCoord`; 0
+/// without a texture), and what a coordinate of that set becomes, with the texture's transform
+/// (`offset + R(rotation) * (scale * uv)`) baked in (the identity without one). gltfpack's
+/// quantized texture coordinates (KHR_mesh_quantization) are integers that this transform maps
+/// back to the texture's coordinates.
+fn base_colour_uvs(material: &gltf::Material<'_>) -> (u32, impl Fn(Vec2) -> Vec2) {
+    let info = material.pbr_metallic_roughness().base_color_texture();
+    let transform = info.as_ref().and_then(|i| i.texture_transform());
+    let set = match (&info, &transform) {
+        (Some(info), t) => t
+            .as_ref()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord()),
+        (None, _) => 0,
+    };
+    let t = transform.map(|t| (Vec2::from(t.offset()), t.rotation(), Vec2::from(t.scale())));
+    let map = move |uv: Vec2| match t {
         None => uv,
         Some((offset, rotation, scale)) => {
             let (sin, cos) = rotation.sin_cos();
             let s = uv * scale;
             offset + Vec2::new(cos * s.x + sin * s.y, -sin * s.x + cos * s.y)
         }
-    }
-}
-
-/// The texture coordinate set a material's base colour texture reads: its KHR_texture_transform
-/// `texCoord` override, else its `texCoord` (0 without a texture).
-fn uv_set(material: &gltf::Material<'_>) -> u32 {
-    material
-        .pbr_metallic_roughness()
-        .base_color_texture()
-        .map_or(0, |info| {
-            info.texture_transform()
-                .and_then(|t| t.tex_coord())
-                .unwrap_or(info.tex_coord())
-        })
+    };
+    (set, map)
 }
 
 /// The meshes to import: (node index or None, mesh) in scene order.
@@ -308,8 +303,7 @@ pub(super) fn import_meshes(
                     generate_normals(&positions, &tris).0
                 }
             };
-            // The set the base colour texture reads (its `texCoord`, or its transform's).
-            let set = uv_set(&prim.material());
+            let (set, transform) = base_colour_uvs(&prim.material());
             let set = if set != 0 && prim.get(&gltf::Semantic::TexCoords(set)).is_none() {
                 scene.diagnostics.push(
                     Diagnostic::warning(
@@ -329,7 +323,6 @@ pub(super) fn import_meshes(
                     let name = format!("TEXCOORD_{set}");
                     check_count(&acc, &name)?;
                     let v = floats(file, l, &acc, 2, &format!("{pp}.attributes.{name}"))?;
-                    let transform = uv_transform(&prim.material());
                     Some(
                         v.chunks_exact(2)
                             .map(|c| transform(Vec2::new(c[0], c[1])))

@@ -3,10 +3,8 @@
 //! reads them. The codecs are meshoptimizer's own (the `meshopt` crate), which are written to take
 //! untrusted input; every range and size is checked here before anything is allocated.
 
+use super::refs::Problem;
 use serde_json::Value;
-
-/// What is wrong, and where: JSON path and message (the caller names the file).
-pub(super) type Problem = (String, String);
 
 fn problem(path: impl Into<String>, message: impl Into<String>) -> Problem {
     (path.into(), message.into())
@@ -19,7 +17,7 @@ pub(super) const EXTENSION: &str = "EXT_meshopt_compression";
 /// 16 MiB plus 1,024 per input byte. meshoptimizer's vertex codec stores a byte channel that is
 /// zero over a block of up to 256 vertices in 2 bits, so a legitimate file decodes to up to about
 /// 1,024 times its compressed size; a file that declares more is refused before allocating.
-pub(super) fn decoded_limit(input_bytes: usize) -> usize {
+fn decoded_limit(input_bytes: usize) -> usize {
     (16usize << 20).saturating_add(input_bytes.saturating_mul(1024))
 }
 
@@ -86,8 +84,12 @@ fn words_of<const N: usize>(bytes: &[u8]) -> Vec<[u32; N]> {
 /// `count` vertices of `4 * N` bytes decoded by the vertex codec.
 fn decode_vertices<const N: usize>(encoded: &[u8], count: usize) -> Option<Vec<u8>> {
     let v = meshopt::decode_vertex_buffer::<Words<N>>(encoded, count).ok()?;
-    let words: Vec<[u32; N]> = v.into_iter().map(|w| w.0).collect();
-    Some(word_bytes(&words))
+    Some(
+        v.iter()
+            .flat_map(|w| w.0)
+            .flat_map(u32::to_ne_bytes)
+            .collect(),
+    )
 }
 
 /// The exponential filter over vertices of `4 * N` bytes, in place.

@@ -195,9 +195,7 @@ fn textures_only(f: &Bytes) -> Result<Option<Diagnostic>, ImportError> {
     if bones != 0 || sequences != 0 || bodyparts != 0 || textures <= 0 {
         return Ok(None);
     }
-    let base = f.file.rsplit(['/', '\\']).next().unwrap_or(f.file);
-    let stem = base.rsplit_once('.').map_or(base, |(s, _)| s);
-    let model = match stem.strip_suffix(['T', 't']) {
+    let model = match file_stem(f.file).strip_suffix(['T', 't']) {
         Some(m) if !m.is_empty() => format!("{m}.mdl"),
         _ => "its model".to_string(),
     };
@@ -214,9 +212,13 @@ fn textures_only(f: &Bytes) -> Result<Option<Diagnostic>, ImportError> {
 
 /// The companion file names of a model file: `<stem>T.mdl` and the sequence group files.
 pub fn texture_companion(file: &str) -> String {
+    format!("{}T.mdl", file_stem(file))
+}
+
+/// A file's name without its folders and its extension (`models/man.mdl` -> `man`).
+fn file_stem(file: &str) -> &str {
     let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
-    let stem = base.rsplit_once('.').map_or(base, |(s, _)| s);
-    format!("{stem}T.mdl")
+    base.rsplit_once('.').map_or(base, |(s, _)| s)
 }
 
 /// The companion files an MDL's header names, by file name: its texture file (`NAMET.mdl`) when it

@@ -83,7 +83,9 @@ pub(crate) fn assemble_minor(sections: &[(Tag, Vec<u8>)], minor: u16) -> Vec<u8>
     }
     // The file ends with the last section: no padding after it.
     let file_size = end;
-    let mut out = Buf::default();
+    // The whole file at once: growing it by doubling copies it several times over, each copy into
+    // memory touched for the first time (a page fault per page).
+    let mut out = Buf(Vec::with_capacity(file_size));
     out.bytes(&MAGIC);
     out.u16(VERSION_MAJOR);
     out.u16(minor);
@@ -237,7 +239,24 @@ pub(crate) const ATTR_UVS: u32 = 2;
 pub(crate) const ATTR_SKIN: u32 = 4;
 
 fn meshes(asset: &Asset, strings: &mut Strings) -> Vec<u8> {
-    let mut b = Buf::default();
+    // Room for every record up front (see `assemble_minor`): the arrays plus each record's header,
+    // metadata and alignment padding.
+    let lods = asset.meshes.iter().flat_map(|m| &m.lods);
+    let size: usize = lods
+        .map(|l| {
+            l.positions.len() * 12
+                + l.normals.len() * 12
+                + l.uvs.len() * 8
+                + std::mem::size_of_val(l.joints.as_slice())
+                + std::mem::size_of_val(l.weights.as_slice())
+                + l.indices.len() * 4
+                + l.submeshes.len() * 16
+                + 16 * ALIGN
+        })
+        .sum();
+    let mut b = Buf(Vec::with_capacity(
+        16 + asset.meshes.len() * 2 * ALIGN + size,
+    ));
     b.u32(asset.meshes.len() as u32);
     b.zeros(12);
     for (mi, mesh) in asset.meshes.iter().enumerate() {

@@ -735,10 +735,10 @@ fn malformed_files_name_file_and_json_path() {
         ("malformed/badArray.gltf", "meshes[0].primitives"),
         // Its POSITION accessor lacks min/max (read without them, with a warning) and holds -inf.
         ("malformed/BoxWithInfinites.glb", "accessors[2]"),
-        (
-            "malformed/buffer-invalid-short-size.glb",
-            "meshes[0].primitives[0].attributes[\"POSITION\"]",
-        ),
+        // What the file is about (MANIFEST.tsv): its buffer is longer than the BIN chunk. (Its
+        // one primitive has no POSITION, which glTF allows and the crate refused first until
+        // session 28; it is now skipped with a warning.)
+        ("malformed/buffer-invalid-short-size.glb", "buffers[0]"),
     ] {
         let Some(e) = import_err(rel) else { return };
         assert!(e.file.ends_with(rel), "{e}");

@@ -212,6 +212,36 @@ fn fill_missing_position_bounds(root: &mut gltf::json::Root) -> Vec<usize> {
     filled
 }
 
+/// The document, validated as [`gltf::Document::from_json`] validates it, except for what the
+/// specification allows and the crate refuses: an accessor with neither `bufferView` nor `sparse`
+/// (all zeros, which sinew's accessor reader gives) and a primitive without POSITION (which the
+/// mesh import skips with a warning, as the specification says a client should).
+fn validated(root: gltf::json::Root) -> gltf::Result<gltf::Document> {
+    use gltf::json::validation::{Error, Validate};
+    let mut errors = Vec::new();
+    root.validate(&root, gltf::json::Path::new, &mut |path, error| {
+        errors.push((path(), error))
+    });
+    errors.retain(|(path, error)| {
+        let path = path.as_str();
+        let zeros = || {
+            path.strip_prefix("accessors[")
+                .and_then(|rest| rest.strip_suffix("].bufferView"))
+                .and_then(|i| i.parse::<usize>().ok())
+                .and_then(|i| root.accessors.get(i))
+                .is_some_and(|a| a.buffer_view.is_none() && a.sparse.is_none())
+        };
+        let no_position =
+            || path.starts_with("meshes[") && path.ends_with("].attributes[\"POSITION\"]");
+        !(*error == Error::Missing && (zeros() || no_position()))
+    });
+    if errors.is_empty() {
+        Ok(gltf::Document::from_json_without_validation(root))
+    } else {
+        Err(gltf::Error::Validation(errors))
+    }
+}
+
 /// The document, and the warnings of what it lacks and is read without.
 pub(super) struct Parsed {
     pub(super) gltf: gltf::Gltf,
@@ -242,14 +272,26 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
     }
     // Our own pass first: indices the crate follows and enumerations it unwraps, which gltf-json
     // 1.4.1 can panic on instead of reporting (docs/reliability.md).
-    let meshopt_json = match serde_json::from_slice::<serde_json::Value>(json) {
-        Ok(value) => {
+    let (meshopt_json, tolerated, patched) = match serde_json::from_slice::<serde_json::Value>(json)
+    {
+        Ok(mut value) => {
+            // First, so that the channels it removes are not checked as the crate would read them.
+            let tolerated = super::tolerate::tolerate(&mut value);
             super::refs::check(&value).map_err(|(path, message)| at(file, path, message))?;
+            // The crate reads the changed document; its errors are placed in that text, whose
+            // JSON paths are the original's (the values and their order are kept).
+            let patched = if tolerated.changed {
+                let text = serde_json::to_vec(&value)
+                    .map_err(|e| ImportError::in_section(file, "json", e.to_string()))?;
+                Some(text)
+            } else {
+                None
+            };
             let uses_meshopt = value
                 .get("extensionsUsed")
                 .and_then(serde_json::Value::as_array)
                 .is_some_and(|used| used.iter().any(|e| e == super::meshopt::EXTENSION));
-            uses_meshopt.then_some(value)
+            (uses_meshopt.then_some(value), tolerated, patched)
         }
         // serde_json skips the keys gltf-json does not know without checking their UTF-8, so a
         // document that is not UTF-8 would reach the crate unchecked (the fuzzer found one that then
@@ -271,14 +313,17 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
             return Err(json_error(file, json, &value_error));
         }
     };
+    let json = patched.as_deref().unwrap_or(json);
     let mut unbounded = Vec::new();
     let parsed = crate::guard::contain(|| {
         let mut root: gltf::json::Root = gltf::json::deserialize::from_slice(json)?;
-        // Extensions sinew reads itself (the crate's validation refuses any it does not know).
-        root.extensions_required
-            .retain(|e| !READ_HERE.contains(&e.as_str()));
+        // Extensions sinew reads itself, and those it reads without (the crate's validation refuses
+        // any it does not know).
+        root.extensions_required.retain(|e| {
+            !READ_HERE.contains(&e.as_str()) && !super::tolerate::TEXTURE_ONLY.contains(&e.as_str())
+        });
         unbounded = fill_missing_position_bounds(&mut root);
-        gltf::Document::from_json(root).map(|document| gltf::Gltf {
+        validated(root).map(|document| gltf::Gltf {
             document,
             blob: None,
         })
@@ -290,14 +335,13 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
             format!("the gltf crate panicked while validating ({m})"),
         )
     })?;
-    let warnings = if unbounded.is_empty() {
-        Vec::new()
-    } else {
+    let mut warnings = tolerated.warnings;
+    if !unbounded.is_empty() {
         let list: Vec<String> = unbounded
             .iter()
             .map(|i| format!("accessors[{i}]"))
             .collect();
-        vec![Diagnostic::warning(
+        warnings.push(Diagnostic::warning(
             "gltf-position-bounds-missing",
             format!(
                 "{} {} no min/max, which glTF requires of POSITION; read without them (sinew reads the data itself)",
@@ -305,8 +349,8 @@ pub(super) fn parse_document(file: &str, json: &[u8]) -> Result<Parsed, ImportEr
                 if list.len() == 1 { "has" } else { "have" }
             ),
         )
-        .with_figure("accessors", unbounded.len() as f64)]
-    };
+        .with_figure("accessors", unbounded.len() as f64));
+    }
     parsed
         .map(|gltf| Parsed {
             gltf,

@@ -32,14 +32,16 @@ pub(super) fn materials(doc: &gltf::Document) -> Vec<Material> {
         .zip(names)
         .map(|(m, name)| {
             let pbr = m.pbr_metallic_roughness();
-            let texture = pbr.base_color_texture().map(|info| {
-                let img = info.texture().source();
-                match img.source() {
+            // A texture without a source (its image only in an extension's format) is left out
+            // (the `gltf-texture-without-image` warning, tolerate.rs).
+            let texture = pbr.base_color_texture().and_then(|info| {
+                let img = info.texture().source()?;
+                Some(match img.source() {
                     gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
                         uri.to_string()
                     }
                     _ => format!("images[{}]", img.index()),
-                }
+                })
             });
             Material {
                 name,
@@ -83,7 +85,9 @@ pub(super) fn mesh_instances<'a>(
     doc: &'a gltf::Document,
     g: &Graph,
 ) -> Vec<(Option<usize>, gltf::Mesh<'a>)> {
-    let roots: Vec<usize> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+    // A scene that lists no nodes is read as no scene (the `gltf-empty-scene` warning).
+    let scene = doc.default_scene().or_else(|| doc.scenes().next());
+    let roots: Vec<usize> = match scene.filter(|s| s.nodes().len() > 0) {
         Some(s) => s.nodes().map(|n| n.index()).collect(),
         None => (0..g.parent.len())
             .filter(|&i| g.parent[i].is_none())

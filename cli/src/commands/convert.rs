@@ -22,7 +22,7 @@ use sinew_core::Skeleton;
 use sinew_pipeline::compile::{
     compile_compressed, compress_clips_timed, CompileReport, CompressedClips,
 };
-use sinew_pipeline::compress::CompressOptions;
+use sinew_pipeline::compress::{CompressOptions, KeptPlain};
 use sinew_pipeline::lod::LodOptions;
 use sinew_pipeline::retarget::RetargetOptions;
 use sinew_scene::{NotBuiltReason, Scene, SceneClip};
@@ -860,7 +860,21 @@ pub fn human_details(input: &str, output: &str, d: &OutputDetails) -> String {
                 sci(r.p99_error),
                 sci(r.tolerance)
             ),
-            Some(_) => "; kept plain (compression did not make it smaller)".to_string(),
+            Some(r) => match (r.kept_plain_because, r.error_limit) {
+                (Some(KeptPlain::ToleranceNotHeld), limit) => format!(
+                    "; kept plain: no encoding held the tolerance {} at every key time{}",
+                    sci(r.tolerance),
+                    match limit.filter(|l| *l < r.tolerance) {
+                        Some(l) => format!(
+                            " (f32 rounding of positions far from the origin left a joint a \
+                             limit of {})",
+                            sci(l)
+                        ),
+                        None => String::new(),
+                    }
+                ),
+                _ => "; kept plain (compression did not make it smaller)".to_string(),
+            },
             None => String::new(),
         };
         let _ = writeln!(

@@ -108,7 +108,7 @@ mod trial;
 
 pub use metric::{measure, skeleton_extent};
 pub use options::{
-    ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
+    ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
     DEFAULT_RELATIVE_TOLERANCE, PARALLEL_VOLUME,
 };
 pub use search::compress_clip;

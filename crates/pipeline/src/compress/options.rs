@@ -124,6 +124,26 @@ pub struct ClipCompressionReport {
     pub kept_keys: usize,
     /// `compressed_bytes / (animated_joints * samples)`.
     pub bytes_per_joint_sample: f32,
-    /// False when the compressed form was not smaller and the plain clip was kept.
+    /// False when the plain clip was kept (see `kept_plain_because`).
     pub compressed: bool,
+    /// Why the plain clip was kept; absent when the clip was compressed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kept_plain_because: Option<KeptPlain>,
+    /// With [`KeptPlain::ToleranceNotHeld`]: the smallest error any joint was allowed, the
+    /// tolerance less the f32 noise of its error points (which grows with their distance from the
+    /// origin, `NOISE_ULPS` in metric.rs), model units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error_limit: Option<f32>,
+}
+
+/// Why [`super::compress_clip`] kept a clip plain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KeptPlain {
+    /// An encoding held the tolerance but was not smaller than the plain record.
+    NotSmaller,
+    /// No encoding held the tolerance at every source key time, even at the widest bit widths:
+    /// the tolerance is within the f32 rounding of the clip's positions (far from the origin) or
+    /// below what the interpolation between kept keys can follow.
+    ToleranceNotHeld,
 }

@@ -5,7 +5,7 @@ use super::metric::{
     clip_extent, errors_against, joint_limits, measure, skeleton_extent, within_limits, Rig,
 };
 use super::options::{
-    ClipCompressionReport, CompressOptions, Effort, DEFAULT_RELATIVE_DISTANCE,
+    ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
     DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FIRST_RUNGS_DOWN, KEY_BUDGETS, MAX_DESCENDED,
     MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
@@ -681,6 +681,16 @@ pub fn compress_clip(
         best = search(source, whole, rig, tolerance, skeleton.is_some(), options);
     }
     let plain_bytes = clip_record_size(source);
+    let (kept_plain_because, error_limit) = match (&best, &whole) {
+        (Some((size, ..)), _) if *size < plain_bytes => (None, None),
+        // (A clip without key times has nothing to encode.)
+        (None, Some((rig, whole))) if !source.times().is_empty() => {
+            let limits = joint_limits(&whole.points, rig.skeleton.len(), tolerance);
+            let tightest = limits.iter().copied().fold(tolerance, f32::min);
+            (Some(KeptPlain::ToleranceNotHeld), Some(tightest))
+        }
+        _ => (Some(KeptPlain::NotSmaller), None),
+    };
     let (out, measured, compressed_bytes) = match best {
         Some((size, clip, errors)) if size < plain_bytes => (clip, Some(errors), size),
         _ => (source.clone(), None, plain_bytes),
@@ -735,6 +745,8 @@ pub fn compress_clip(
         kept_keys: out.times().len(),
         bytes_per_joint_sample: compressed_bytes as f32 / (animated_joints * samples).max(1) as f32,
         compressed: out.is_compressed(),
+        kept_plain_because,
+        error_limit,
     };
     (out, report)
 }

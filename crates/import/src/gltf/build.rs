@@ -55,7 +55,7 @@ pub(super) fn import_inner(
                 "gltf-node-skeleton",
                 "the file has animations but no skin: every node becomes a joint",
             ));
-            Some(build_rig(file, &l, &g, &all, None)?)
+            Some(build_rig(file, &l, &g, &all, None, &mut scene.diagnostics)?)
         } else {
             None
         }
@@ -97,7 +97,14 @@ pub(super) fn import_inner(
                 "the skin has no joints",
             ));
         }
-        Some(build_rig(file, &l, &g, &joints, Some(skin))?)
+        Some(build_rig(
+            file,
+            &l,
+            &g,
+            &joints,
+            Some(skin),
+            &mut scene.diagnostics,
+        )?)
     };
 
     scene.materials = materials(doc);

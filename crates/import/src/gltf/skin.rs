@@ -229,12 +229,59 @@ pub(super) fn is_identity(m: &Mat4) -> bool {
     m.abs_diff_eq(Mat4::IDENTITY, 1e-7)
 }
 
+/// glTF's inverse bind matrices are affine (last row 0, 0, 0, 1); skinning reads that row (it
+/// scales the parent's translation in the skinning matrix), so a matrix with another last row
+/// would skin its vertices by a projective transform no runtime draws. Such rows are set to
+/// (0, 0, 0, 1), with a warning naming the matrices (`gltf-ibm-not-affine`). `m`: column-major
+/// matrices, 16 floats each.
+fn affine_inverse_binds(m: &mut [f32], path: &str) -> Option<Diagnostic> {
+    const TOLERANCE: f32 = 1e-5;
+    const AFFINE: [f32; 4] = [0.0, 0.0, 0.0, 1.0];
+    let mut fixed = Vec::new();
+    for (k, a) in m.chunks_exact_mut(16).enumerate() {
+        let row = [a[3], a[7], a[11], a[15]];
+        if row
+            .iter()
+            .zip(AFFINE)
+            .any(|(x, w)| (x - w).abs() > TOLERANCE)
+        {
+            fixed.push(format!(
+                "{k} ({}, {}, {}, {})",
+                row[0], row[1], row[2], row[3]
+            ));
+            [a[3], a[7], a[11], a[15]] = AFFINE;
+        }
+    }
+    if fixed.is_empty() {
+        return None;
+    }
+    let count = fixed.len();
+    fixed.truncate(8);
+    let more = if count > 8 {
+        format!(" ({count} in all)")
+    } else {
+        String::new()
+    };
+    Some(
+        Diagnostic::warning(
+            "gltf-ibm-not-affine",
+            format!(
+                "{path}: matrices {}{more} have a last row other than (0, 0, 0, 1), which glTF \
+                 requires; read with (0, 0, 0, 1)",
+                fixed.join(", ")
+            ),
+        )
+        .with_figure("matrices", count as f64),
+    )
+}
+
 pub(super) fn build_rig(
     file: &str,
     l: &Loaded,
     g: &Graph,
     joints: &[usize],
     skin: Option<gltf::Skin<'_>>,
+    diagnostics: &mut Vec<Diagnostic>,
 ) -> Result<Rig, ImportError> {
     let skin_path = skin.as_ref().map(|s| format!("skins[{}]", s.index()));
     let ibm: Option<Vec<f32>> = match skin.as_ref().and_then(|s| s.inverse_bind_matrices()) {
@@ -250,6 +297,10 @@ pub(super) fn build_rig(
                     p,
                     format!("{} matrices for {} joints", v.len() / 16, joints.len()),
                 ));
+            }
+            let mut v = v;
+            if let Some(d) = affine_inverse_binds(&mut v[..joints.len() * 16], &p) {
+                diagnostics.push(d);
             }
             Some(v)
         }
@@ -317,4 +368,38 @@ pub(super) fn build_rig(
         pre,
         skin: skin.map(|s| s.index()),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::affine_inverse_binds;
+
+    #[test]
+    fn inverse_bind_matrices_get_an_affine_last_row_with_a_warning() {
+        // Two column-major matrices: a translation by (5, 6, 7), affine; then the same with the
+        // last row (1, 2, 3, 4) (the Khronos validator's invalid_ibm.gltf has this one).
+        let affine: [f32; 16] = [
+            1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 5.0, 6.0, 7.0, 1.0,
+        ];
+        let mut m = affine.to_vec();
+        let mut bad = affine;
+        [bad[3], bad[7], bad[11], bad[15]] = [1.0, 2.0, 3.0, 4.0];
+        m.extend(bad);
+        let d = affine_inverse_binds(&mut m, "skins[0].inverseBindMatrices").unwrap();
+        assert_eq!(d.code, "gltf-ibm-not-affine");
+        assert!(
+            d.message
+                .starts_with("skins[0].inverseBindMatrices: matrices 1 (1, 2, 3, 4) have"),
+            "{}",
+            d.message
+        );
+        // Both are now the affine translation; the first was not touched.
+        assert_eq!(m[..16], affine);
+        assert_eq!(m[16..], affine);
+        // Nothing to say about affine matrices, including a last row within 1e-5.
+        let mut near = affine;
+        near[15] = 1.0 + 4e-6;
+        assert!(affine_inverse_binds(&mut near, "p").is_none());
+        assert_eq!(near[15], 1.0 + 4e-6);
+    }
 }

@@ -1,7 +1,78 @@
 //! Argument definitions (clap derive). One struct per subcommand, named after it.
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, ValueEnum};
 use std::path::PathBuf;
+
+/// The subcommand enum `Command`, its parsing and its clap definition, each subcommand's arguments
+/// deferred until it is parsed: `Variant(Args) = "name", "about", "after_help";` per subcommand,
+/// in the order help lists them.
+macro_rules! lazy_subcommands {
+    ($($variant:ident($args:ty) = $name:literal, $about:literal, $after:literal;)*) => {
+        /// The subcommands.
+        #[derive(Debug)]
+        pub enum Command {
+            $(#[doc = $about] $variant($args),)*
+        }
+
+        impl clap::FromArgMatches for Command {
+            fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+                Self::from_arg_matches_mut(&mut m.clone())
+            }
+            fn from_arg_matches_mut(m: &mut clap::ArgMatches) -> Result<Self, clap::Error> {
+                match m.remove_subcommand() {
+                    $(Some((name, mut sub)) if name == $name => Ok(Self::$variant(
+                        <$args as clap::FromArgMatches>::from_arg_matches_mut(&mut sub)?,
+                    )),)*
+                    Some((name, _)) => Err(clap::Error::raw(
+                        clap::error::ErrorKind::InvalidSubcommand,
+                        format!("the subcommand '{name}' wasn't recognized"),
+                    )),
+                    None => Err(clap::Error::raw(
+                        clap::error::ErrorKind::MissingSubcommand,
+                        "A subcommand is required but one was not provided.",
+                    )),
+                }
+            }
+            fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+                self.update_from_arg_matches_mut(&mut m.clone())
+            }
+            fn update_from_arg_matches_mut(
+                &mut self,
+                m: &mut clap::ArgMatches,
+            ) -> Result<(), clap::Error> {
+                *self = Self::from_arg_matches_mut(m)?;
+                Ok(())
+            }
+        }
+
+        impl clap::Subcommand for Command {
+            fn augment_subcommands(cmd: clap::Command) -> clap::Command {
+                // `about` before the deferral too: the parent's help lists it unbuilt.
+                cmd$(.subcommand(
+                    clap::Command::new($name).about($about).after_help($after).defer(|c| {
+                        <$args as clap::Args>::augment_args(c)
+                            .about($about)
+                            .long_about(None)
+                            .after_help($after)
+                    }),
+                ))*
+            }
+            fn augment_subcommands_for_update(cmd: clap::Command) -> clap::Command {
+                cmd$(.subcommand(
+                    clap::Command::new($name).about($about).after_help($after).defer(|c| {
+                        <$args as clap::Args>::augment_args_for_update(c)
+                            .about($about)
+                            .long_about(None)
+                            .after_help($after)
+                    }),
+                ))*
+            }
+            fn has_subcommand(name: &str) -> bool {
+                [$($name),*].contains(&name)
+            }
+        }
+    };
+}
 
 /// sinew: convert, inspect and check skeletal animation assets.
 #[derive(Debug, Parser)]
@@ -31,59 +102,40 @@ pub struct GlobalArgs {
     pub quiet: bool,
 }
 
-/// The subcommands.
-#[derive(Debug, Subcommand)]
-pub enum Command {
-    /// Show what a file holds: skeleton tree, clips, meshes, LODs, diagnostics.
-    #[command(
-        after_help = "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect zombie.ms3d --ms3d-position-keys viewer\n  sinew inspect Fox.glb --json | jq '.clips[].name'\n  sinew inspect walk.bvh --pose walk@0.5\n  sinew inspect walk.bvh --pose walk@0..1 --fps 10 --json"
-    )]
-    Inspect(InspectArgs),
-    /// Convert models and motions to .sinew (one file, or many in parallel with --out-dir).
-    #[command(
-        after_help = "Examples:\n  sinew convert zombie.ms3d -o zombie.sinew\n  sinew convert scientist.ms3d --anim walk.bvh --retarget --at \"Bip01 Spine\" -o scientist.sinew\n  sinew convert scientist.ms3d --clips idle=1-30,walk=31-60 --lod 0.5,0.25 -o scientist.sinew\n  sinew convert models/*.glb models/*.ms3d --out-dir out/ --jobs 4 --json > report.json\n\nExit codes: 0 all converted, 1 some files of a batch failed (all are listed), 2 bad input or usage."
-    )]
-    Convert(ConvertArgs),
-    /// Show how a motion's joints bind to a rig's joints, and save the mapping.
-    #[command(
-        after_help = "Examples:\n  sinew map fixtures/biped.sinew walk.bvh\n  sinew map scientist.ms3d walk.bvh --write map.json\n  sinew map scientist.ms3d walk.bvh --map map.json --json"
-    )]
-    Map(MapArgs),
-    /// Split every clip into partial-body clips (upper/lower at joints, or named joint masks).
-    #[command(
-        after_help = "Examples:\n  sinew split scientist.sinew --at \"Bip01 Spine\" -o scientist_split.sinew\n  sinew split biped.sinew --mask \"arms=Bip01 L UpperArm,Bip01 R UpperArm\" -o out.sinew"
-    )]
-    Split(SplitArgs),
-    /// Regenerate the LODs of a .sinew file.
-    #[command(
-        after_help = "Examples:\n  sinew lod scientist.sinew -o scientist.sinew --lod 0.6,0.3\n  sinew lod scientist.sinew -o scientist_nolod.sinew --lod none"
-    )]
-    Lod(LodCmdArgs),
-    /// Print a shell completion script on stdout.
-    #[command(
-        after_help = "Examples:\n  sinew completions bash > ~/.local/share/bash-completion/completions/sinew\n  sinew completions zsh > ~/.zfunc/_sinew"
-    )]
-    Completions(CompletionsArgs),
-    /// Bake a skinned vertex cache (EXR VAT, PC2 or MDD) with sinew-core, plus sidecar and OBJ.
-    #[command(
-        after_help = "Examples:\n  sinew bake fixtures/biped.sinew --clip walk --format exr -o walk.exr\n  sinew bake fixtures/biped.sinew --layer walk --layer wave@upper:0.8 --format exr -o crowd.exr\n  sinew bake CesiumMan.glb --format pc2 --vertex-order source -o man.pc2\n\nWrites OUT, its sidecar (<stem>-remap_info.json for EXR, OUT.json otherwise), OUT.obj and,\nfor EXR with --normals file, <stem>_normals.exr. Layout: docs/formats/vat.md."
-    )]
-    Bake(BakeArgs),
-    /// Check a baked cache bit for bit against a re-bake through sinew-core (exit 1 on a difference).
-    #[command(
-        after_help = "Examples:\n  sinew verify walk.exr --against fixtures/biped.sinew\n  sinew verify man.pc2 --against man.sinew --json"
-    )]
-    Verify(VerifyArgs),
-    /// Export to glTF 2.0 (.glb or .gltf): skeleton, skin, meshes, LODs, textures, every clip sampled.
-    #[command(
-        after_help = "Examples:\n  sinew export fixtures/biped.sinew -o biped.glb\n  sinew export man.mdl -o man.gltf\n  sinew export zombie.ms3d --lod 0.5,0.25 -o zombie.glb --json\n\nDecisions (axes, units, extras, MSFT_lod): docs/export.md."
-    )]
-    Export(ExportArgs),
-    /// Draw a contact sheet PNG: rest pose front and side with the skeleton, clip poses, LODs.
-    #[command(
-        after_help = "Examples:\n  sinew preview fixtures/biped.sinew -o biped.png\n  sinew preview man.mdl --clip walk --frames 8 -o walk.png\n  sinew preview zombie.ms3d --lod 0.5,0.25 --names -o zombie.png\n\nLayout and sizes: docs/cli.md."
-    )]
-    Preview(PreviewArgs),
+// The subcommands. Each one's arguments are built only when that subcommand is parsed (clap's
+// `Command::defer`): a process builds and matches `convert`'s arguments, not all ten commands'
+// (0.11 ms of a cold process's 0.24, docs/performance.md, session 28). The derive would build all.
+lazy_subcommands! {
+    Inspect(InspectArgs) = "inspect",
+        "Show what a file holds: skeleton tree, clips, meshes, LODs, diagnostics",
+        "Examples:\n  sinew inspect fixtures/biped.sinew\n  sinew inspect zombie.ms3d --ms3d-position-keys viewer\n  sinew inspect Fox.glb --json | jq '.clips[].name'\n  sinew inspect walk.bvh --pose walk@0.5\n  sinew inspect walk.bvh --pose walk@0..1 --fps 10 --json";
+    Convert(ConvertArgs) = "convert",
+        "Convert models and motions to .sinew (one file, or many in parallel with --out-dir)",
+        "Examples:\n  sinew convert zombie.ms3d -o zombie.sinew\n  sinew convert scientist.ms3d --anim walk.bvh --retarget --at \"Bip01 Spine\" -o scientist.sinew\n  sinew convert scientist.ms3d --clips idle=1-30,walk=31-60 --lod 0.5,0.25 -o scientist.sinew\n  sinew convert models/*.glb models/*.ms3d --out-dir out/ --jobs 4 --json > report.json\n\nExit codes: 0 all converted, 1 some files of a batch failed (all are listed), 2 bad input or usage.";
+    Map(MapArgs) = "map",
+        "Show how a motion's joints bind to a rig's joints, and save the mapping",
+        "Examples:\n  sinew map fixtures/biped.sinew walk.bvh\n  sinew map scientist.ms3d walk.bvh --write map.json\n  sinew map scientist.ms3d walk.bvh --map map.json --json";
+    Split(SplitArgs) = "split",
+        "Split every clip into partial-body clips (upper/lower at joints, or named joint masks)",
+        "Examples:\n  sinew split scientist.sinew --at \"Bip01 Spine\" -o scientist_split.sinew\n  sinew split biped.sinew --mask \"arms=Bip01 L UpperArm,Bip01 R UpperArm\" -o out.sinew";
+    Lod(LodCmdArgs) = "lod",
+        "Regenerate the LODs of a .sinew file",
+        "Examples:\n  sinew lod scientist.sinew -o scientist.sinew --lod 0.6,0.3\n  sinew lod scientist.sinew -o scientist_nolod.sinew --lod none";
+    Completions(CompletionsArgs) = "completions",
+        "Print a shell completion script on stdout",
+        "Examples:\n  sinew completions bash > ~/.local/share/bash-completion/completions/sinew\n  sinew completions zsh > ~/.zfunc/_sinew";
+    Bake(BakeArgs) = "bake",
+        "Bake a skinned vertex cache (EXR VAT, PC2 or MDD) with sinew-core, plus sidecar and OBJ",
+        "Examples:\n  sinew bake fixtures/biped.sinew --clip walk --format exr -o walk.exr\n  sinew bake fixtures/biped.sinew --layer walk --layer wave@upper:0.8 --format exr -o crowd.exr\n  sinew bake CesiumMan.glb --format pc2 --vertex-order source -o man.pc2\n\nWrites OUT, its sidecar (<stem>-remap_info.json for EXR, OUT.json otherwise), OUT.obj and,\nfor EXR with --normals file, <stem>_normals.exr. Layout: docs/formats/vat.md.";
+    Verify(VerifyArgs) = "verify",
+        "Check a baked cache bit for bit against a re-bake through sinew-core (exit 1 on a difference)",
+        "Examples:\n  sinew verify walk.exr --against fixtures/biped.sinew\n  sinew verify man.pc2 --against man.sinew --json";
+    Export(ExportArgs) = "export",
+        "Export to glTF 2.0 (.glb or .gltf): skeleton, skin, meshes, LODs, textures, every clip sampled",
+        "Examples:\n  sinew export fixtures/biped.sinew -o biped.glb\n  sinew export man.mdl -o man.gltf\n  sinew export zombie.ms3d --lod 0.5,0.25 -o zombie.glb --json\n\nDecisions (axes, units, extras, MSFT_lod): docs/export.md.";
+    Preview(PreviewArgs) = "preview",
+        "Draw a contact sheet PNG: rest pose front and side with the skeleton, clip poses, LODs",
+        "Examples:\n  sinew preview fixtures/biped.sinew -o biped.png\n  sinew preview man.mdl --clip walk --frames 8 -o walk.png\n  sinew preview zombie.ms3d --lod 0.5,0.25 --names -o zombie.png\n\nLayout and sizes: docs/cli.md.";
 }
 
 /// Import options shared by every command that reads source files.
@@ -504,4 +556,49 @@ pub struct PreviewArgs {
     /// Import options.
     #[command(flatten)]
     pub import: ImportArgs,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Cli, Command};
+    use clap::{CommandFactory, Parser, Subcommand};
+
+    #[test]
+    fn the_deferred_definitions_are_consistent_and_parse_each_subcommand() {
+        // Builds every subcommand (the deferred arguments included) and runs clap's own checks.
+        Cli::command().debug_assert();
+        let names = [
+            "inspect",
+            "convert",
+            "map",
+            "split",
+            "lod",
+            "completions",
+            "bake",
+            "verify",
+            "export",
+            "preview",
+        ];
+        let listed: Vec<String> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_owned())
+            .collect();
+        assert_eq!(listed, names);
+        assert!(names.iter().all(|n| Command::has_subcommand(n)));
+        assert!(!Command::has_subcommand("help"));
+        let cli =
+            Cli::try_parse_from(["sinew", "--json", "convert", "a.glb", "-o", "b.sinew"]).unwrap();
+        assert!(cli.global.json);
+        match cli.command {
+            Command::Convert(a) => {
+                assert_eq!(a.inputs, [std::path::PathBuf::from("a.glb")]);
+            }
+            other => panic!("{other:?}"),
+        }
+        let cli = Cli::try_parse_from(["sinew", "map", "rig.ms3d", "walk.bvh", "-q"]).unwrap();
+        assert!(cli.global.quiet);
+        assert!(matches!(cli.command, Command::Map(ref m) if m.motion.ends_with("walk.bvh")));
+        let e = Cli::try_parse_from(["sinew", "nope"]).unwrap_err();
+        assert_eq!(e.kind(), clap::error::ErrorKind::InvalidSubcommand);
+    }
 }

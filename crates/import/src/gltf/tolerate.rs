@@ -1,9 +1,10 @@
 //! Valid glTF 2.0 that gltf-json 1.4.1 refuses, made readable before it deserializes and validates
 //! the document: a scene without `nodes` (optional in the specification, a required field for the
-//! crate), an animation channel whose target names no node (KHR_animation_pointer's channels, which
-//! the specification allows; the crate requires `node`; such channels are skipped), and required extensions that only supply
-//! textures in formats sinew does not decode (KHR_texture_basisu, EXT_texture_webp,
-//! EXT_texture_avif): their textures are left out, as is any texture without an image sinew reads.
+//! crate), an animation channel whose target names no node (KHR_animation_pointer's channels,
+//! which the specification allows; the crate requires `node`; such channels are skipped), and
+//! required extensions that only supply textures in formats sinew does not decode
+//! (KHR_texture_basisu, EXT_texture_webp, EXT_texture_avif): their textures are left out, as is
+//! any texture without an image sinew reads.
 //! Each change to the document comes with a warning; docs/formats/gltf.md lists them. The Khronos
 //! glTF-Validator's own test files are where these were found (docs/formats/gltf.md, session 28).
 
@@ -23,9 +24,10 @@ pub(super) struct Tolerated {
     pub(super) warnings: Vec<Diagnostic>,
 }
 
-/// Adds `"nodes": []` to scenes without it (and says so when the scene read lists no nodes), removes the animation channels whose target names no
-/// node, and reports the texture-only required extensions and the textures without a core image
-/// (which the crate reads as textures without a source, [`gltf::texture::Texture::source`]).
+/// Adds `"nodes": []` to scenes without it (and says so when the scene read lists no nodes),
+/// removes the animation channels whose target names no node, and reports the texture-only
+/// required extensions and the textures without a core image (which the crate reads as textures
+/// without a source, [`gltf::texture::Texture::source`]).
 pub(super) fn tolerate(root: &mut Value) -> Tolerated {
     let mut out = Tolerated::default();
     let Some(root) = root.as_object_mut() else {

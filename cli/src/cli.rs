@@ -3,6 +3,21 @@
 use clap::{Args, Parser, ValueEnum};
 use std::path::PathBuf;
 
+/// `cmd` with each subcommand added, its arguments (`Args::$augment`) deferred until it is parsed;
+/// `about` set before the deferral too, since the parent's help lists the subcommand unbuilt.
+macro_rules! deferred_subcommands {
+    ($cmd:expr, $augment:ident, $(($args:ty, $name:literal, $about:literal, $after:literal))*) => {
+        $cmd$(.subcommand(
+            clap::Command::new($name).about($about).after_help($after).defer(|c| {
+                <$args as clap::Args>::$augment(c)
+                    .about($about)
+                    .long_about(None)
+                    .after_help($after)
+            }),
+        ))*
+    };
+}
+
 /// The subcommand enum `Command`, its parsing and its clap definition, each subcommand's arguments
 /// deferred until it is parsed: `Variant(Args) = "name", "about", "after_help";` per subcommand,
 /// in the order help lists them.
@@ -47,25 +62,14 @@ macro_rules! lazy_subcommands {
 
         impl clap::Subcommand for Command {
             fn augment_subcommands(cmd: clap::Command) -> clap::Command {
-                // `about` before the deferral too: the parent's help lists it unbuilt.
-                cmd$(.subcommand(
-                    clap::Command::new($name).about($about).after_help($after).defer(|c| {
-                        <$args as clap::Args>::augment_args(c)
-                            .about($about)
-                            .long_about(None)
-                            .after_help($after)
-                    }),
-                ))*
+                deferred_subcommands!(cmd, augment_args, $(($args, $name, $about, $after))*)
             }
             fn augment_subcommands_for_update(cmd: clap::Command) -> clap::Command {
-                cmd$(.subcommand(
-                    clap::Command::new($name).about($about).after_help($after).defer(|c| {
-                        <$args as clap::Args>::augment_args_for_update(c)
-                            .about($about)
-                            .long_about(None)
-                            .after_help($after)
-                    }),
-                ))*
+                deferred_subcommands!(
+                    cmd,
+                    augment_args_for_update,
+                    $(($args, $name, $about, $after))*
+                )
             }
             fn has_subcommand(name: &str) -> bool {
                 [$($name),*].contains(&name)

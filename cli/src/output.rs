@@ -161,6 +161,22 @@ mod one_line_tests {
 mod tests {
     use super::*;
 
+    /// The permission bits of `p`.
+    #[cfg(unix)]
+    fn mode(p: &Path) -> u32 {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::metadata(p).unwrap().permissions().mode() & 0o777
+    }
+
+    /// The mode a plain new file gets in `dir` (0666 less this process's umask), from a file
+    /// `probe` written there.
+    #[cfg(unix)]
+    fn new_file_mode(dir: &Path) -> u32 {
+        let probe = dir.join("probe");
+        std::fs::write(&probe, b"x").unwrap();
+        mode(&probe)
+    }
+
     #[test]
     fn atomic_write_replaces_content_and_leaves_no_temp() {
         let dir = tempfile::tempdir().unwrap();
@@ -178,15 +194,10 @@ mod tests {
     #[cfg(unix)]
     #[test]
     fn written_files_get_the_mode_a_new_file_gets() {
-        use std::os::unix::fs::PermissionsExt;
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("a.bin");
         write_atomic(&out, b"x").unwrap();
-        // The mode a plain new file gets here (0666 less this process's umask).
-        let probe = dir.path().join("probe");
-        std::fs::write(&probe, b"x").unwrap();
-        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
-        assert_eq!(mode(&out), mode(&probe));
+        assert_eq!(mode(&out), new_file_mode(dir.path()));
         assert_ne!(mode(&out), 0o600, "umask 0177 would be unusual here");
     }
 
@@ -209,10 +220,7 @@ mod tests {
         assert_eq!(std::io::read_to_string(held).unwrap(), "old contents");
         assert_ne!(std::fs::metadata(&out).unwrap().ino(), old_inode);
         // The new file's mode, not the old one's (0600), as a rename leaves it.
-        let probe = dir.path().join("probe");
-        std::fs::write(&probe, b"x").unwrap();
-        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
-        assert_eq!(mode(&out), mode(&probe));
+        assert_eq!(mode(&out), new_file_mode(dir.path()));
         let mut names: Vec<_> = std::fs::read_dir(dir.path())
             .unwrap()
             .map(|e| e.unwrap().file_name().into_string().unwrap())

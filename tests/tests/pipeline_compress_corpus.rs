@@ -53,14 +53,47 @@ fn rig(
     (n, p, b)
 }
 
-fn models(parents: &[Option<usize>], local: &[Transform]) -> Vec<Mat4> {
+/// Per root: the joint the metric measures its subtree about (the compression metric's anchor,
+/// `sinew_pipeline::compress`'s docs): the root, or down the chain of single children from it while
+/// `clip` holds the joint still, the first it moves or that branches.
+fn anchors(parents: &[Option<usize>], names: &[String], clip: &SceneClip) -> Vec<usize> {
+    let children = |j: usize| -> Vec<usize> {
+        (0..parents.len())
+            .filter(|&c| parents[c] == Some(j))
+            .collect()
+    };
+    let still = |j: usize| {
+        clip.tracks.iter().filter(|t| t.joint == names[j]).all(|t| {
+            t.translation.values.windows(2).all(|w| w[0] == w[1])
+                && t.rotation.values.windows(2).all(|w| w[0] == w[1])
+                && t.scale.values.windows(2).all(|w| w[0] == w[1])
+        })
+    };
+    (0..parents.len())
+        .filter(|&j| parents[j].is_none())
+        .map(|mut j| {
+            while let (true, [only]) = (still(j), children(j).as_slice()) {
+                j = *only;
+            }
+            j
+        })
+        .collect()
+}
+
+/// Model matrices of a local pose; each `(anchor, origin)` of `rebase` has `origin` taken off its
+/// translation (so its subtree follows it).
+fn models(parents: &[Option<usize>], local: &[Transform], rebase: &[(usize, Vec3)]) -> Vec<Mat4> {
     let mut out: Vec<Mat4> = Vec::new();
     for (j, t) in local.iter().enumerate() {
         let m = Mat4::from_scale_rotation_translation(t.scale, t.rotation, t.translation);
-        out.push(match parents[j] {
+        let mut m = match parents[j] {
             Some(p) => out[p] * m,
             None => m,
-        });
+        };
+        for &(_, o) in rebase.iter().filter(|(a, _)| *a == j) {
+            m.w_axis -= o.extend(0.0);
+        }
+        out.push(m);
     }
     out
 }
@@ -74,7 +107,8 @@ fn max_error(
     distance: f32,
 ) -> f32 {
     let (names, parents, bind) = rig(skeleton, src);
-    let bind_models = models(&parents, &bind);
+    let bind_models = models(&parents, &bind, &[]);
+    let anchors = anchors(&parents, &names, src);
     let offsets: Vec<[Vec3; 3]> = bind_models
         .iter()
         .map(|m| {
@@ -121,7 +155,17 @@ fn max_error(
         sampler
             .sample(decoded, &binding, &sk, t, &mut pose)
             .unwrap();
-        let (a, b) = (models(&parents, &source), models(&parents, &pose));
+        // Both measured about the source's anchors at this time: the metric's definition, which
+        // keeps the f32 rounding of coordinates far from the origin out of the comparison.
+        let world = models(&parents, &source, &[]);
+        let origins: Vec<(usize, Vec3)> = anchors
+            .iter()
+            .map(|&a| (a, world[a].w_axis.truncate()))
+            .collect();
+        let (a, b) = (
+            models(&parents, &source, &origins),
+            models(&parents, &pose, &origins),
+        );
         for j in 0..a.len() {
             for o in offsets[j] {
                 worst = worst.max(a[j].transform_point3(o).distance(b[j].transform_point3(o)));

@@ -1,6 +1,6 @@
 //! Incremental error evaluation of a quantisation while its bit widths change.
 
-use super::metric::{exceeds, joint_limits, Rig};
+use super::metric::{exceeds, joint_limits, rebase_on, Rig};
 use super::quantize::{locate, raw_rotation, Layout, Quant};
 use super::reduce::{WChan, Work};
 use rayon::prelude::*;
@@ -19,6 +19,11 @@ pub(super) struct Ctx<'a> {
     /// Per source time, per joint: the source's error points (shared with the search that made
     /// them: computed once per clip).
     pub(super) src: Arc<Vec<Vec<[Vec3; 3]>>>,
+    /// Per source time, per anchor: the origin the error points are about ([`Rig::source_points`]).
+    pub(super) origins: Arc<Vec<Vec3>>,
+    /// The rig's anchors in joint order, with their positions in `rig.anchors` (what
+    /// [`Eval::pose_into`] walks).
+    pub(super) anchor_order: Vec<(usize, usize)>,
     /// `src` flattened (time-major, `nj` joints per time): what [`Eval`] reads in its loops.
     pub(super) src_flat: Vec<[Vec3; 3]>,
     /// Per source time, per joint (time-major): the source's model-space rotation (the product of
@@ -36,15 +41,21 @@ pub(super) struct Ctx<'a> {
 pub(super) struct Sampled {
     /// Per time: the local pose.
     pub(super) poses: Vec<Vec<Transform>>,
-    /// Per time, per joint: the error points.
+    /// Per time, per joint: the error points, about the time's origins.
     pub(super) points: Arc<Vec<Vec<[Vec3; 3]>>>,
+    /// Per time, per anchor: the origin ([`Rig::source_points`]).
+    pub(super) origins: Arc<Vec<Vec3>>,
 }
 
 impl Sampled {
     pub(super) fn new(rig: &Rig, clip: &Clip, times: &[f32]) -> Sampled {
         let poses = rig.poses(clip, times);
-        let points = Arc::new(rig.all_points(&poses));
-        Sampled { poses, points }
+        let (points, origins) = rig.source_points(&poses);
+        Sampled {
+            poses,
+            points: Arc::new(points),
+            origins: Arc::new(origins),
+        }
     }
 }
 
@@ -85,6 +96,13 @@ impl<'a> Ctx<'a> {
         fill_rows(poses, &mut src_rot, nj, par, rotations_into);
         fill_rows(src.as_slice(), &mut src_flat, nj, par, points_into);
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
+        let mut anchor_order: Vec<(usize, usize)> = rig
+            .anchors
+            .iter()
+            .enumerate()
+            .map(|(s, &a)| (a, s))
+            .collect();
+        anchor_order.sort_unstable();
         let uniform = poses.iter().flatten().all(|t| {
             let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
             lo > 0.0 && hi <= lo * (1.0 + 1e-4)
@@ -94,6 +112,8 @@ impl<'a> Ctx<'a> {
             like,
             times,
             src,
+            origins: Arc::clone(&sampled.origins),
+            anchor_order,
             src_flat,
             src_rot,
             limits,
@@ -728,12 +748,28 @@ impl<'a> Eval<'a> {
 
     /// Every joint's local and model transform at source time `i` into `local` and `model` (one
     /// per joint, parents first).
+    /// The anchors' model transforms are rebased on the source's origins at `i`
+    /// ([`Rig::rebase`]).
     fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
+        let origins = self.origins_at(i);
+        // The anchors in joint order, each compared with in turn (most rigs have one).
+        let mut anchors = self.ctx.anchor_order.iter();
+        let mut next = anchors.next();
         for d in 0..self.nj {
             local[d] = self.local_pose(d, i).to_affine();
             let pm = self.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
             model[d] = pm * local[d];
+            if let Some(&(_, slot)) = next.filter(|(a, _)| *a == d) {
+                rebase_on(&mut model[d], origins, slot);
+                next = anchors.next();
+            }
         }
+    }
+
+    /// The origins of source time `i` (one per anchor).
+    #[inline]
+    pub(super) fn origins_at(&self, i: usize) -> &[Vec3] {
+        self.ctx.rig.origins_at(&self.ctx.origins, i)
     }
 
     /// The largest ratio of a joint's error to its limit at source time `i` with the model

@@ -29,6 +29,26 @@ pub(super) struct Rig {
     /// Per joint `j`, per position `n > 0` in `subtree[j]`: the position of that joint's parent
     /// (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
     pub(super) subtree_parent: Vec<Vec<usize>>,
+    /// Per root, in skeleton order: its anchor, the joint its subtree's error points are measured
+    /// about ([`Rig::rebase`]): the root, or down the chain of single children from it while the
+    /// joint is not animated, the first that is or that has no child or several (`Hips` under a
+    /// capture's static `Root`, or under an armature node). Each time's origins
+    /// ([`Rig::source_points`]) hold one translation per anchor.
+    pub(super) anchors: Vec<usize>,
+    /// Per joint: its position in `anchors`, or [`NOT_AN_ANCHOR`].
+    pub(super) anchor_slot: Vec<usize>,
+}
+
+/// [`Rig::anchor_slot`] of a joint that is not an anchor.
+pub(super) const NOT_AN_ANCHOR: usize = usize::MAX;
+
+/// Anchor `slot`'s model transform `m` about its origin in `origins` (one time's,
+/// [`Rig::origins_at`]): [`Rig::rebase`] where the caller knows the slot.
+#[inline]
+pub(super) fn rebase_on(m: &mut Affine3A, origins: &[Vec3], slot: usize) {
+    if let Some(o) = origins.get(slot) {
+        m.translation -= sinew_core::glam::Vec3A::from(*o);
+    }
 }
 
 pub(super) fn model_scale(a: &Affine3A) -> f32 {
@@ -152,6 +172,17 @@ impl Rig {
                 bind.push(Transform::IDENTITY);
             }
         }
+        let animated: Vec<bool> = names
+            .iter()
+            .map(|name| {
+                clip.tracks().iter().any(|t| {
+                    t.joint == *name
+                        && (matches!(t.translation, Channel::Animated(_))
+                            || matches!(t.rotation, Channel::Animated(_))
+                            || matches!(t.scale, Channel::Animated(_)))
+                })
+            })
+            .collect();
         let inv = inverse_bind_from_locals(&parents, &bind);
         let skeleton = Skeleton::new(names, parents.clone(), bind.clone(), inv).ok()?;
         let mut m = Vec::new();
@@ -180,6 +211,26 @@ impl Rig {
             .collect();
         let subtree = subtrees(skeleton.parents());
         let subtree_parent = subtree_parents(skeleton.parents(), &subtree);
+        let mut children = vec![Vec::new(); n];
+        for (j, p) in parents.iter().enumerate() {
+            if let Some(p) = p.map(usize::from).filter(|&p| p < j) {
+                children[p].push(j);
+            }
+        }
+
+        let anchors: Vec<usize> = (0..n)
+            .filter(|&j| parents[j].is_none())
+            .map(|mut j| {
+                while let (false, [only]) = (animated[j], children[j].as_slice()) {
+                    j = *only;
+                }
+                j
+            })
+            .collect();
+        let mut anchor_slot = vec![NOT_AN_ANCHOR; n];
+        for (slot, &j) in anchors.iter().enumerate() {
+            anchor_slot[j] = slot;
+        }
         Some(Rig {
             skeleton,
             points,
@@ -190,7 +241,27 @@ impl Rig {
             parent_scale,
             subtree,
             subtree_parent,
+            anchors,
+            anchor_slot,
         })
+    }
+
+    /// The origins of one time (`anchors.len()` of them) in `origins` (time-major).
+    #[inline]
+    pub(super) fn origins_at<'o>(&self, origins: &'o [Vec3], time: usize) -> &'o [Vec3] {
+        let n = self.anchors.len();
+        origins.get(time * n..(time + 1) * n).unwrap_or(&[])
+    }
+
+    /// Joint `j`'s model transform `m` as the error metric measures it at a time whose origins are
+    /// `origins` ([`Rig::origins_at`]): an anchor's translation less the source's at that time, so
+    /// that its subtree is carried through the chain near the origin (see the module docs: the
+    /// same distances in exact arithmetic, without the f32 rounding of coordinates far from it).
+    #[inline]
+    pub(super) fn rebase(&self, j: usize, origins: &[Vec3], m: &mut Affine3A) {
+        if let Some(&slot) = self.anchor_slot.get(j).filter(|&&s| s != NOT_AN_ANCHOR) {
+            rebase_on(m, origins, slot);
+        }
     }
 
     /// Per joint: how far its rotation error moves error points once the joints with quantized
@@ -219,17 +290,57 @@ impl Rig {
         lever
     }
 
-    /// Model-space error points of every joint for a local pose.
+    /// Error points of every joint for a local pose, its anchors rebased on `origins`
+    /// ([`Rig::rebase`]).
     pub(super) fn points_of(
         &self,
         local: &[Transform],
+        origins: &[Vec3],
         m: &mut Vec<Affine3A>,
         out: &mut Vec<[Vec3; 3]>,
     ) {
-        fk(self.skeleton.parents(), local, m);
+        self.rebased_fk(local, origins, m);
         out.clear();
         for (a, p) in m.iter().zip(&self.points) {
             out.push(p.map(|x| a.transform_point3(x)));
+        }
+    }
+
+    /// The model transforms of a local pose, its anchors rebased on `origins` ([`Rig::rebase`]).
+    pub(super) fn rebased_fk(
+        &self,
+        local: &[Transform],
+        origins: &[Vec3],
+        out: &mut Vec<Affine3A>,
+    ) {
+        self.anchored_fk(local, out, |slot, m| rebase_on(m, origins, slot));
+    }
+
+    /// The model transforms of a local pose, each anchor's handed to `at_anchor` (with its
+    /// position among the anchors) before its children are composed with it.
+    fn anchored_fk(
+        &self,
+        local: &[Transform],
+        out: &mut Vec<Affine3A>,
+        mut at_anchor: impl FnMut(usize, &mut Affine3A),
+    ) {
+        let parents = self.skeleton.parents();
+        out.clear();
+        for (j, t) in local.iter().enumerate() {
+            let a = t.to_affine();
+            let mut m = match parents.get(j).copied().flatten() {
+                Some(p) => out.get(p as usize).copied().unwrap_or(Affine3A::IDENTITY) * a,
+                None => a,
+            };
+            if let Some(slot) = self
+                .anchor_slot
+                .get(j)
+                .copied()
+                .filter(|&s| s != NOT_AN_ANCHOR)
+            {
+                at_anchor(slot, &mut m);
+            }
+            out.push(m);
         }
     }
 
@@ -262,19 +373,44 @@ impl Rig {
         }
     }
 
-    /// Error points for each pose.
-    pub(super) fn all_points(&self, poses: &[Vec<Transform>]) -> Vec<Vec<[Vec3; 3]>> {
-        let points_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
-            let mut out = Vec::new();
-            self.points_of(p, m, &mut out);
-            out
+    /// Error points for each pose of the source, and the origins they are about (time-major, one
+    /// per anchor): each anchor's model-space translation in that pose, so that its own points
+    /// have no translation ([`Rig::rebase`]).
+    pub(super) fn source_points(
+        &self,
+        poses: &[Vec<Transform>],
+    ) -> (Vec<Vec<[Vec3; 3]>>, Vec<Vec3>) {
+        let na = self.anchors.len();
+        let points_of = |m: &mut Vec<Affine3A>, pose: &Vec<Transform>| {
+            let mut origins = vec![Vec3::ZERO; na];
+            self.anchored_fk(pose, m, |slot, mj| {
+                if let Some(o) = origins.get_mut(slot) {
+                    *o = mj.translation.into();
+                }
+                rebase_on(mj, &origins, slot);
+            });
+            let points = m
+                .iter()
+                .zip(&self.points)
+                .map(|(a, p)| p.map(|x| a.transform_point3(x)))
+                .collect::<Vec<_>>();
+            (points, origins)
         };
-        if self.side_by_side(poses.len()) {
+        let per_pose: Vec<(Vec<[Vec3; 3]>, Vec<Vec3>)> = if self.side_by_side(poses.len()) {
             poses.par_iter().map_init(Vec::new, points_of).collect()
         } else {
             let mut m = Vec::new();
             poses.iter().map(|p| points_of(&mut m, p)).collect()
-        }
+        };
+        let mut origins = Vec::with_capacity(poses.len() * na);
+        let points = per_pose
+            .into_iter()
+            .map(|(p, o)| {
+                origins.extend(o);
+                p
+            })
+            .collect();
+        (points, origins)
     }
 
     /// Whether a pass over `times` source times of a clip on this rig runs in chunks of
@@ -312,30 +448,31 @@ pub fn measure(
         return Vec::new();
     };
     let times = source.times();
-    errors_against(
-        &rig,
-        &rig.all_points(&rig.poses(source, times)),
-        candidate,
-        times,
-    )
+    let (src, origins) = rig.source_points(&rig.poses(source, times));
+    errors_against(&rig, &src, &origins, candidate, times)
 }
 
-/// [`measure`] with the source's error points at `times` already computed (`src`). Long clips are
-/// measured in chunks side by side ([`Rig::poses`]); the errors are the same.
+/// [`measure`] with the source's error points and origins at `times` already computed (`src`,
+/// `origins`). Long clips are measured in chunks side by side ([`Rig::poses`]); the errors are the
+/// same.
 pub(super) fn errors_against(
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     candidate: &Clip,
     times: &[f32],
 ) -> Vec<f32> {
     let errors_of = |first: usize, times: &[f32]| {
         let mut out = Vec::with_capacity(times.len() * rig.skeleton.len());
-        runtime_points(rig, candidate, times, |k, pts| match src.get(first + k) {
-            Some(s) => {
-                out.extend(point_error(s, pts));
-                false
+        let origins = origins.get(first * rig.anchors.len()..).unwrap_or(&[]);
+        runtime_points(rig, candidate, times, origins, |k, pts| {
+            match src.get(first + k) {
+                Some(s) => {
+                    out.extend(point_error(s, pts));
+                    false
+                }
+                None => true,
             }
-            None => true,
         });
         out
     };
@@ -360,12 +497,14 @@ pub(super) fn within_limits(errors: &[f32], limits: &[f32]) -> bool {
 }
 
 /// Samples `clip` with the runtime's sampler at each of `times` (over the bind pose, or the identity
-/// for an additive clip) and calls `stop` with the time's index and the rig's model-space points,
+/// for an additive clip) and calls `stop` with the time's index and the rig's error points (about
+/// the source's origins at that time, `origins`: time-major, as [`Rig::source_points`] gives them),
 /// until `stop` returns true.
 pub(super) fn runtime_points(
     rig: &Rig,
     clip: &Clip,
     times: &[f32],
+    origins: &[Vec3],
     mut stop: impl FnMut(usize, &[[Vec3; 3]]) -> bool,
 ) {
     let binding = ClipBinding::new(clip, &rig.skeleton);
@@ -380,7 +519,7 @@ pub(super) fn runtime_points(
     for (k, &t) in times.iter().enumerate() {
         pose.copy_from_slice(&defaults);
         let _ = sampler.sample(clip, &binding, &rig.skeleton, t, &mut pose);
-        rig.points_of(&pose, &mut m, &mut pts);
+        rig.points_of(&pose, rig.origins_at(origins, k), &mut m, &mut pts);
         if stop(k, &pts) {
             return;
         }

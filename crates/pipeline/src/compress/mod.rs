@@ -10,6 +10,19 @@
 //! three distances. Joints a clip does not drive take their bind values (so they move with their
 //! parents). Without a skeleton every track is a root of its own.
 //!
+//! Both are measured about the source's *anchor* of each root at that time: the root, or, down the
+//! chain of single children from it while the joint is not animated, the first that is or that
+//! branches (a capture's `Hips` under a static `Root`). The anchor's model transform has the
+//! source's anchor position at that time taken off its translation, in both computations, so its
+//! subtree is carried through the chain near the origin. In exact arithmetic the distances are the
+//! same as in model space; in f32 they are without the rounding of coordinates far from the origin,
+//! which is not the encoding's (a capture in centimetres 6.7 m out: one f32 step of a coordinate is
+//! 6e-5 there, and eight of them were half of a 0.001 tolerance). The anchor's own translation is
+//! compared exactly: the runtime's decoded value less the source's. The encoder still allows each
+//! joint the tolerance less 8 f32 steps of its error points' largest coordinate (now about the
+//! anchor), so that another f32 computation of the same measure stays within it
+//! (docs/performance.md, session 29).
+//!
 //! # What the encoder does, in order
 //!
 //! 1. Channels that one value (their middle value, or the bind value when a skeleton is given and the
@@ -90,6 +103,8 @@
 //!
 //! Key times are kept as the source has them (no resampling), so every source key is honoured in time.
 
+#[cfg(test)]
+mod anchor_tests;
 mod eval;
 mod metric;
 mod options;

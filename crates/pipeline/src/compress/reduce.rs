@@ -1,6 +1,6 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
-use super::metric::{fk, point_error, Rig};
+use super::metric::{point_error, rebase_on, Rig, NOT_AN_ANCHOR};
 use rayon::prelude::*;
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -194,6 +194,7 @@ pub(super) fn simplify_channels<'p>(
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     src_times: &[f32],
     poses: Option<&'p [Vec<Transform>]>,
     budget: f32,
@@ -221,7 +222,7 @@ pub(super) fn simplify_channels<'p>(
             None => return None,
         },
     };
-    let mut state = SubtreeState::new(rig, local, like.additive());
+    let mut state = SubtreeState::new(rig, local, origins, like.additive());
     #[allow(clippy::needless_range_loop)] // `work` is replaced inside the loop
     for i in 0..work.tracks.len() {
         let Some(joint) = rig.skeleton.find(&work.tracks[i].joint).map(usize::from) else {
@@ -330,8 +331,10 @@ struct SubtreeState<'a, 'p> {
     /// Borrowed until a channel is replaced (most clips' channels are kept as they are).
     local: Cow<'p, [Vec<Transform>]>,
     /// Worked out at the first try (the channels the source holds at their bind values need
-    /// none).
+    /// none), the anchors rebased on `origins` ([`Rig::rebase`]).
     model: Option<Vec<Vec<Affine3A>>>,
+    /// Per source time, per root: the origin the error points are about.
+    origins: &'a [Vec3],
     /// Per joint: itself, then its descendants in skeleton order (the rig's).
     subtree: &'a [Vec<usize>],
     defaults: Vec<Transform>,
@@ -340,7 +343,12 @@ struct SubtreeState<'a, 'p> {
 impl<'a, 'p> SubtreeState<'a, 'p> {
     /// The state of the work whose poses at the source times are `local` (`additive`: the
     /// clip's kind).
-    fn new(rig: &'a Rig, local: Cow<'p, [Vec<Transform>]>, additive: bool) -> Self {
+    fn new(
+        rig: &'a Rig,
+        local: Cow<'p, [Vec<Transform>]>,
+        origins: &'a [Vec3],
+        additive: bool,
+    ) -> Self {
         let nj = rig.skeleton.len();
         let defaults = if additive {
             vec![Transform::IDENTITY; nj]
@@ -350,6 +358,7 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         SubtreeState {
             local,
             model: None,
+            origins,
             subtree: &rig.subtree,
             defaults,
         }
@@ -373,7 +382,7 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         }
         let models = self
             .model
-            .get_or_insert_with(|| models_of(rig, &self.local));
+            .get_or_insert_with(|| models_of(rig, &self.local, self.origins));
         let parents = rig.skeleton.parents();
         let sub = &self.subtree[joint];
         let mut at = vec![0usize; rig.skeleton.len()];
@@ -382,19 +391,23 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
         }
         // Per time, the subtree's new model transforms (in `sub` order).
         let mut new_model: Vec<Affine3A> = Vec::with_capacity(self.local.len() * sub.len());
-        for ((local, model), src_k) in self.local.iter().zip(models.iter()).zip(src) {
+        for (k, ((local, model), src_k)) in
+            self.local.iter().zip(models.iter()).zip(src).enumerate()
+        {
             let base = new_model.len();
+            let origins = rig.origins_at(self.origins, k);
             for (n, &d) in sub.iter().enumerate() {
                 let a = if n == 0 {
                     value.applied(local[d]).to_affine()
                 } else {
                     local[d].to_affine()
                 };
-                let m = match parents.get(d).copied().flatten().map(usize::from) {
+                let mut m = match parents.get(d).copied().flatten().map(usize::from) {
                     Some(p) if n > 0 => new_model[base + at[p]] * a,
                     Some(p) => model[p] * a,
                     None => a,
                 };
+                rig.rebase(d, origins, &mut m);
                 new_model.push(m);
                 let pts = rig.points[d].map(|x| m.transform_point3(x));
                 let e =
@@ -420,18 +433,27 @@ impl<'a, 'p> SubtreeState<'a, 'p> {
     }
 }
 
-/// The model transforms of `local`'s poses (forward kinematics at every time; a long clip's times
-/// side by side, each computed alone: the same values either way).
-fn models_of(rig: &Rig, local: &[Vec<Transform>]) -> Vec<Vec<Affine3A>> {
-    let model_of = |m: &mut Vec<Affine3A>, p: &Vec<Transform>| {
-        fk(rig.skeleton.parents(), p, m);
+/// The model transforms of `local`'s poses, the anchors rebased on `origins` (forward kinematics at
+/// every time, [`Rig::rebased_fk`]; a long clip's times side by side, each computed alone: the
+/// same values either way).
+fn models_of(rig: &Rig, local: &[Vec<Transform>], origins: &[Vec3]) -> Vec<Vec<Affine3A>> {
+    let model_of = |m: &mut Vec<Affine3A>, (k, p): (usize, &Vec<Transform>)| {
+        rig.rebased_fk(p, rig.origins_at(origins, k), m);
         m.clone()
     };
     if rig.side_by_side(local.len()) {
-        local.par_iter().map_init(Vec::new, model_of).collect()
+        local
+            .par_iter()
+            .enumerate()
+            .map_init(Vec::new, model_of)
+            .collect()
     } else {
         let mut m = Vec::new();
-        local.iter().map(|p| model_of(&mut m, p)).collect()
+        local
+            .iter()
+            .enumerate()
+            .map(|p| model_of(&mut m, p))
+            .collect()
     }
 }
 
@@ -491,12 +513,13 @@ pub(super) fn reduce_keys(
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     known: Option<&[Vec<Transform>]>,
     budget: f32,
 ) -> Vec<usize> {
     let n = work.times.len();
     if let Some(poses) = known.filter(|p| p.len() == n) {
-        return reduce_posed(&work.times, poses, rig, src, budget);
+        return reduce_posed(&work.times, poses, rig, src, origins, budget);
     }
     if n <= 2 {
         return (0..n).collect();
@@ -509,6 +532,7 @@ pub(super) fn reduce_keys(
         &rig.poses(&plain, &work.times),
         rig,
         src,
+        origins,
         budget,
     )
 }
@@ -519,6 +543,7 @@ fn reduce_posed(
     poses: &[Vec<Transform>],
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     budget: f32,
 ) -> Vec<usize> {
     let n = times.len();
@@ -547,10 +572,13 @@ fn reduce_posed(
                     scale: p.scale.lerp(q.scale, x),
                 }
                 .to_affine();
-                let model = match parents.get(j).copied().flatten() {
+                let mut model = match parents.get(j).copied().flatten() {
                     Some(p) => m.get(p as usize).copied().unwrap_or(Affine3A::IDENTITY) * local,
                     None => local,
                 };
+                if let Some(&slot) = rig.anchor_slot.get(j).filter(|&&s| s != NOT_AN_ANCHOR) {
+                    rebase_on(&mut model, rig.origins_at(origins, k), slot);
+                }
                 m.push(model);
                 let pts = at.map(|x| model.transform_point3(x));
                 if point_error(std::slice::from_ref(src_j), std::slice::from_ref(&pts))

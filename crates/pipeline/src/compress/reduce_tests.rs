@@ -16,6 +16,7 @@ fn reduce_keys_whole_poses(
     like: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     budget: f32,
 ) -> Vec<usize> {
     let n = work.times.len();
@@ -35,7 +36,7 @@ fn reduce_keys_whole_poses(
                     scale: p.scale.lerp(q.scale, x),
                 };
             }
-            rig.points_of(&lerped, &mut m, &mut pts);
+            rig.points_of(&lerped, rig.origins_at(origins, k), &mut m, &mut pts);
             if point_error(src_k, &pts).any(|e| e > budget) {
                 return false;
             }
@@ -55,13 +56,14 @@ fn stopping_at_the_first_joint_over_the_budget_keeps_the_same_keys() {
         let skeleton = chain(joints, 0.4);
         let source = swing_moving(&skeleton, 90, moving).to_plain();
         let rig = Rig::new(&source, Some(&skeleton), 0.1).unwrap();
-        let src = rig.all_points(&rig.poses(&source, source.times()));
+        let poses = rig.poses(&source, source.times());
+        let (src, origins) = rig.source_points(&poses);
         let work = Work::from_plain(&source);
         for budget in [1e-6, 1e-4, 1e-3, 1e-2, 0.1] {
-            let kept = reduce_keys(&work, &source, &rig, &src, None, budget);
+            let kept = reduce_keys(&work, &source, &rig, &src, &origins, None, budget);
             assert_eq!(
                 kept,
-                reduce_keys_whole_poses(&work, &source, &rig, &src, budget),
+                reduce_keys_whole_poses(&work, &source, &rig, &src, &origins, budget),
                 "{joints} joints, budget {budget}"
             );
             kept_counts.push(kept.len());

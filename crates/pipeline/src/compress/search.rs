@@ -276,12 +276,13 @@ pub(super) fn compress_work(
         None => Ctx::new(rig, source, times, tolerance),
     };
     let compensate = compensate && ctx.uniform;
-    let src = &ctx.src;
+    let (src, origins) = (&ctx.src, ctx.origins.as_slice());
     let poses = simplify_channels(
         work,
         source,
         rig,
         src,
+        origins,
         times,
         sampled.map(|s| s.poses.as_slice()),
         tolerance * 0.25,
@@ -308,7 +309,7 @@ pub(super) fn compress_work(
         // order, on the poses the channel simplification leaves (the same work's, computed once).
         let known = poses.as_deref().filter(|_| base.times.as_slice() == times);
         let reduced: Vec<Vec<usize>> = map_in_order(budgets, par, |frac| {
-            reduce_keys(&base, source, rig, src, known, tolerance * frac)
+            reduce_keys(&base, source, rig, src, origins, known, tolerance * frac)
         });
         for (bi, kept) in reduced.into_iter().enumerate() {
             if !kept_sets.contains(&kept) {
@@ -395,7 +396,7 @@ pub(super) fn compress_work(
         };
         descend(&mut e, alone, thresholds);
         let holds = |c: Clip| {
-            let errors = errors_against(rig, src, &c, times);
+            let errors = errors_against(rig, src, origins, &c, times);
             within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
         };
         e.encode(w).and_then(holds).or_else(|| {
@@ -578,13 +579,13 @@ fn search(
     };
     let mut found: Vec<Found> = Vec::new();
     let times = source.times();
-    let src = &*whole.points;
-    if let Some(thin) = thinned(source, rig, src, Some(&whole.poses), tolerance) {
+    let (src, origins) = (&*whole.points, whole.origins.as_slice());
+    if let Some(thin) = thinned(source, rig, src, origins, Some(&whole.poses), tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // Its errors at every source time (those at the thinned times are the search's), kept
         // with the clip when each is within its joint's limit: they are the report's.
         let holds = |(size, c, _): Found| {
-            let errors = errors_against(rig, src, &c, times);
+            let errors = errors_against(rig, src, origins, &c, times);
             within_limits(&errors, &limits).then_some((size, c, errors))
         };
         let reduced = tolerance * (1.0 - THINNING);
@@ -625,17 +626,27 @@ pub(super) const THINNING: f32 = 0.01;
 /// within 2e-6 rad: Fox's Walk has 157 key times for 18 glTF keys), and the search's cost grows with
 /// the times it measures. A result of the search on the thinned source is kept only if it holds at
 /// every time of the whole source.
-/// `src`: the source's error points at its times; `poses`: its poses at its times, when known.
+/// `src`, `origins`: the source's error points at its times and their origins ([`Rig::source_points`]);
+/// `poses`: its poses at its times, when known.
 pub(super) fn thinned(
     source: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
     poses: Option<&[Vec<Transform>]>,
     tolerance: f32,
 ) -> Option<Clip> {
     let times = source.times();
     let work = Work::from_plain(source);
-    let kept = reduce_keys(&work, source, rig, src, poses, tolerance * THINNING);
+    let kept = reduce_keys(
+        &work,
+        source,
+        rig,
+        src,
+        origins,
+        poses,
+        tolerance * THINNING,
+    );
     if kept.len() * 5 > times.len() * 4 {
         return None;
     }
@@ -699,7 +710,9 @@ pub fn compress_clip(
     // the same way).
     let mut errors = match (measured, &whole) {
         (Some(errors), _) => errors,
-        (None, Some((rig, whole))) => errors_against(rig, &whole.points, &out, source.times()),
+        (None, Some((rig, whole))) => {
+            errors_against(rig, &whole.points, &whole.origins, &out, source.times())
+        }
         (None, None) => measure(source, &out, skeleton, distance),
     };
     let max_error = errors.iter().copied().fold(0.0, f32::max);

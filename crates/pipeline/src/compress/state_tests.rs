@@ -7,7 +7,7 @@ use super::quantize::Layout;
 use super::reduce::Work;
 use super::search::{estimated_candidates, first_state};
 use super::tests::{moving_chain, on_threads};
-use sinew_core::glam::Affine3A;
+use sinew_core::glam::{Affine3A, Vec3A};
 
 #[test]
 fn the_candidates_chosen_are_the_first_of_a_longer_list() {
@@ -90,10 +90,17 @@ fn the_local_poses_filled_in_are_those_the_model_transforms_were_computed_from()
                 e.fill_local();
                 let nj = e.nj;
                 assert_eq!(e.local_aff.len(), e.model.len());
-                for (local, model) in e.local_aff.chunks(nj).zip(e.model.chunks(nj)) {
+                // (The anchor's model transform is about the source's anchor at that time.)
+                let anchor = rig.anchors[0];
+                for (i, (local, model)) in
+                    e.local_aff.chunks(nj).zip(e.model.chunks(nj)).enumerate()
+                {
                     for d in 0..nj {
                         let parent = e.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
-                        let again = parent * local[d];
+                        let mut again = parent * local[d];
+                        if d == anchor {
+                            again.translation -= Vec3A::from(ctx.origins[i]);
+                        }
                         assert_eq!(again.to_cols_array(), model[d].to_cols_array());
                     }
                 }

@@ -14,7 +14,7 @@
 //! buffers only.
 
 use super::eval::{point_distance, Eval};
-use super::metric::exceeds;
+use super::metric::{exceeds, rebase_on, NOT_AN_ANCHOR};
 use super::quantize::{raw_rotation, Kind, Quant};
 use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -60,6 +60,10 @@ pub(super) struct Trial {
     nsub: usize,
     /// The subtree's joints, in subtree order.
     rows: Vec<Row>,
+    /// The position in `rows` of the rig's anchor the subtree holds ([`NONE`] if none), and its
+    /// position among the anchors ([`super::metric::Rig::rebase`]).
+    anchor_row: usize,
+    anchor_slot: usize,
     /// Per joint, its subtree's rows once looked up ([`Trial::set_rows`]), for the layout at this
     /// address.
     row_cache: Vec<Vec<Row>>,
@@ -318,6 +322,17 @@ impl Trial {
         self.rows.clear();
         self.rows.extend_from_slice(&self.row_cache[self.j]);
         self.nsub = self.rows.len();
+        // A subtree holds at most one anchor (one per root).
+        let slots = &e.ctx.rig.anchor_slot;
+        (self.anchor_row, self.anchor_slot) = self
+            .rows
+            .iter()
+            .enumerate()
+            .find_map(|(n, row)| {
+                let slot = slots.get(row.d).copied().unwrap_or(NOT_AN_ANCHOR);
+                (slot != NOT_AN_ANCHOR).then_some((n, slot))
+            })
+            .unwrap_or((NONE, NOT_AN_ANCHOR));
         self.slot_quant.clear();
         if self.rot {
             let nc = e.layout.comps.len();
@@ -425,7 +440,10 @@ impl Trial {
             } else {
                 state_model[row.pj]
             };
-            let m = pm * local;
+            let mut m = pm * local;
+            if n == self.anchor_row {
+                rebase_on(&mut m, e.origins_at(i), self.anchor_slot);
+            }
             model[n] = m;
             model_set[n] = true;
             seen[n] = true;

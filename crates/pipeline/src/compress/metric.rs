@@ -531,16 +531,17 @@ pub(super) fn exceeds(error: f32, limit: f32) -> bool {
     error.is_nan() || error > limit
 }
 
-/// How far f32 arithmetic alone may move a model-space point, per unit of its largest coordinate,
-/// as a multiple of `f32::EPSILON`: a one-ulp difference in a local rotation or translation, carried
-/// through a chain of parents, moves a point far from the origin by a few ulps of its coordinates
-/// (measured on the corpus: up to 4 ulps between the compiled clip and its source curves).
+/// How far f32 arithmetic alone may move an error point, per unit of its largest coordinate (about
+/// its anchor, [`Rig::rebase`]), as a multiple of `f32::EPSILON`: a one-ulp difference in a local
+/// rotation or translation, carried through a chain of parents, moves a point far from the anchor
+/// by a few ulps of its coordinates (measured on the corpus: up to 4 ulps between the compiled clip
+/// and its source curves).
 pub(super) const NOISE_ULPS: f32 = 8.0;
 
 /// Per joint: the error the encoder allows, the tolerance less the f32 noise of the joint's error
-/// points ([`NOISE_ULPS`] x epsilon x their largest coordinate over the clip), so that the error
-/// measured against the source by another computation stays within the tolerance. At least half
-/// the tolerance.
+/// points ([`NOISE_ULPS`] x epsilon x their largest coordinate about the anchor over the clip), so
+/// that the error measured against the source by another computation stays within the tolerance.
+/// At least half the tolerance.
 pub(super) fn joint_limits(src: &[Vec<[Vec3; 3]>], joints: usize, tolerance: f32) -> Vec<f32> {
     let mut mag = vec![0.0f32; joints];
     for key in src {

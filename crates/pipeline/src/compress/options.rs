@@ -131,7 +131,7 @@ pub struct ClipCompressionReport {
     pub kept_plain_because: Option<KeptPlain>,
     /// With [`KeptPlain::ToleranceNotHeld`]: the smallest error any joint was allowed, the
     /// tolerance less the f32 noise of its error points (which grows with their distance from the
-    /// origin, `NOISE_ULPS` in metric.rs), model units.
+    /// figure's anchor, `NOISE_ULPS` in metric.rs), model units.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error_limit: Option<f32>,
 }
@@ -143,7 +143,7 @@ pub enum KeptPlain {
     /// An encoding held the tolerance but was not smaller than the plain record.
     NotSmaller,
     /// No encoding held the tolerance at every source key time, even at the widest bit widths:
-    /// the tolerance is within the f32 rounding of the clip's positions (far from the origin) or
+    /// the tolerance is within the f32 rounding of the figure's coordinates about its anchor or
     /// below what the interpolation between kept keys can follow.
     ToleranceNotHeld,
 }

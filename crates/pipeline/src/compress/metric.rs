@@ -172,17 +172,6 @@ impl Rig {
                 bind.push(Transform::IDENTITY);
             }
         }
-        let animated: Vec<bool> = names
-            .iter()
-            .map(|name| {
-                clip.tracks().iter().any(|t| {
-                    t.joint == *name
-                        && (matches!(t.translation, Channel::Animated(_))
-                            || matches!(t.rotation, Channel::Animated(_))
-                            || matches!(t.scale, Channel::Animated(_)))
-                })
-            })
-            .collect();
         let inv = inverse_bind_from_locals(&parents, &bind);
         let skeleton = Skeleton::new(names, parents.clone(), bind.clone(), inv).ok()?;
         let mut m = Vec::new();
@@ -217,7 +206,15 @@ impl Rig {
                 children[p].push(j);
             }
         }
-
+        let mut animated = vec![false; n];
+        for t in clip.tracks() {
+            let moves = matches!(t.translation, Channel::Animated(_))
+                || matches!(t.rotation, Channel::Animated(_))
+                || matches!(t.scale, Channel::Animated(_));
+            if let Some(j) = skeleton.find(&t.joint).map(usize::from).filter(|_| moves) {
+                animated[j] = true;
+            }
+        }
         let anchors: Vec<usize> = (0..n)
             .filter(|&j| parents[j].is_none())
             .map(|mut j| {

@@ -21,9 +21,6 @@ pub(super) struct Ctx<'a> {
     pub(super) src: Arc<Vec<Vec<[Vec3; 3]>>>,
     /// Per source time, per anchor: the origin the error points are about ([`Rig::source_points`]).
     pub(super) origins: Arc<Vec<Vec3>>,
-    /// The rig's anchors in joint order, with their positions in `rig.anchors` (what
-    /// [`Eval::pose_into`] walks).
-    pub(super) anchor_order: Vec<(usize, usize)>,
     /// `src` flattened (time-major, `nj` joints per time): what [`Eval`] reads in its loops.
     pub(super) src_flat: Vec<[Vec3; 3]>,
     /// Per source time, per joint (time-major): the source's model-space rotation (the product of
@@ -96,13 +93,6 @@ impl<'a> Ctx<'a> {
         fill_rows(poses, &mut src_rot, nj, par, rotations_into);
         fill_rows(src.as_slice(), &mut src_flat, nj, par, points_into);
         let limits = joint_limits(&src, rig.skeleton.len(), tolerance);
-        let mut anchor_order: Vec<(usize, usize)> = rig
-            .anchors
-            .iter()
-            .enumerate()
-            .map(|(s, &a)| (a, s))
-            .collect();
-        anchor_order.sort_unstable();
         let uniform = poses.iter().flatten().all(|t| {
             let (lo, hi) = (t.scale.min_element(), t.scale.max_element());
             lo > 0.0 && hi <= lo * (1.0 + 1e-4)
@@ -113,7 +103,6 @@ impl<'a> Ctx<'a> {
             times,
             src,
             origins: Arc::clone(&sampled.origins),
-            anchor_order,
             src_flat,
             src_rot,
             limits,
@@ -747,19 +736,18 @@ impl<'a> Eval<'a> {
     }
 
     /// Every joint's local and model transform at source time `i` into `local` and `model` (one
-    /// per joint, parents first).
-    /// The anchors' model transforms are rebased on the source's origins at `i`
-    /// ([`Rig::rebase`]).
+    /// per joint, parents first), the anchors' model transforms rebased on the source's origins at
+    /// `i` ([`Rig::rebase`]).
     fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
         let origins = self.origins_at(i);
-        // The anchors in joint order, each compared with in turn (most rigs have one).
-        let mut anchors = self.ctx.anchor_order.iter();
+        // The anchors are in joint order: each compared with in turn (most rigs have one).
+        let mut anchors = self.ctx.rig.anchors.iter().enumerate();
         let mut next = anchors.next();
         for d in 0..self.nj {
             local[d] = self.local_pose(d, i).to_affine();
             let pm = self.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
             model[d] = pm * local[d];
-            if let Some(&(_, slot)) = next.filter(|(a, _)| *a == d) {
+            if let Some((slot, _)) = next.filter(|&(_, &a)| a == d) {
                 rebase_on(&mut model[d], origins, slot);
                 next = anchors.next();
             }

@@ -29,18 +29,15 @@ pub(super) struct Rig {
     /// Per joint `j`, per position `n > 0` in `subtree[j]`: the position of that joint's parent
     /// (`usize::MAX` at `n == 0`, whose parent is outside the subtree).
     pub(super) subtree_parent: Vec<Vec<usize>>,
-    /// Per root, in skeleton order: its anchor, the joint its subtree's error points are measured
-    /// about ([`Rig::rebase`]): the root, or down the chain of single children from it while the
-    /// joint is not animated, the first that is or that has no child or several (`Hips` under a
-    /// capture's static `Root`, or under an armature node). Each time's origins
-    /// ([`Rig::source_points`]) hold one translation per anchor.
+    /// The anchors, one per root, in joint order: the joint a root's subtree's error points are
+    /// measured about ([`Rig::rebase`]): the root, or down the chain of single children from it
+    /// while the joint is not animated, the first that is or that has no child or several (`Hips`
+    /// under a capture's static `Root`, or under an armature node). Each time's origins
+    /// ([`Rig::source_points`]) hold one translation per anchor, in this order.
     pub(super) anchors: Vec<usize>,
-    /// Per joint: its position in `anchors`, or [`NOT_AN_ANCHOR`].
-    pub(super) anchor_slot: Vec<usize>,
+    /// Per joint: its position in `anchors` if it is one ([`Rig::anchor_of`]).
+    anchor_slot: Vec<Option<usize>>,
 }
-
-/// [`Rig::anchor_slot`] of a joint that is not an anchor.
-pub(super) const NOT_AN_ANCHOR: usize = usize::MAX;
 
 /// Anchor `slot`'s model transform `m` about its origin in `origins` (one time's,
 /// [`Rig::origins_at`]): [`Rig::rebase`] where the caller knows the slot.
@@ -215,7 +212,7 @@ impl Rig {
                 animated[j] = true;
             }
         }
-        let anchors: Vec<usize> = (0..n)
+        let mut anchors: Vec<usize> = (0..n)
             .filter(|&j| parents[j].is_none())
             .map(|mut j| {
                 while let (false, [only]) = (animated[j], children[j].as_slice()) {
@@ -224,9 +221,11 @@ impl Rig {
                 j
             })
             .collect();
-        let mut anchor_slot = vec![NOT_AN_ANCHOR; n];
+        // In joint order, so that a pass over the joints meets them in turn (`Eval::pose_into`).
+        anchors.sort_unstable();
+        let mut anchor_slot = vec![None; n];
         for (slot, &j) in anchors.iter().enumerate() {
-            anchor_slot[j] = slot;
+            anchor_slot[j] = Some(slot);
         }
         Some(Rig {
             skeleton,
@@ -243,6 +242,12 @@ impl Rig {
         })
     }
 
+    /// Joint `j`'s position among the anchors, if it is one.
+    #[inline]
+    pub(super) fn anchor_of(&self, j: usize) -> Option<usize> {
+        self.anchor_slot.get(j).copied().flatten()
+    }
+
     /// The origins of one time (`anchors.len()` of them) in `origins` (time-major).
     #[inline]
     pub(super) fn origins_at<'o>(&self, origins: &'o [Vec3], time: usize) -> &'o [Vec3] {
@@ -256,7 +261,7 @@ impl Rig {
     /// same distances in exact arithmetic, without the f32 rounding of coordinates far from it).
     #[inline]
     pub(super) fn rebase(&self, j: usize, origins: &[Vec3], m: &mut Affine3A) {
-        if let Some(&slot) = self.anchor_slot.get(j).filter(|&&s| s != NOT_AN_ANCHOR) {
+        if let Some(slot) = self.anchor_of(j) {
             rebase_on(m, origins, slot);
         }
     }
@@ -329,12 +334,7 @@ impl Rig {
                 Some(p) => out.get(p as usize).copied().unwrap_or(Affine3A::IDENTITY) * a,
                 None => a,
             };
-            if let Some(slot) = self
-                .anchor_slot
-                .get(j)
-                .copied()
-                .filter(|&s| s != NOT_AN_ANCHOR)
-            {
+            if let Some(slot) = self.anchor_of(j) {
                 at_anchor(slot, &mut m);
             }
             out.push(m);

@@ -1,6 +1,6 @@
 //! Key reduction: constant channels and keys that interpolation reproduces are dropped.
 
-use super::metric::{point_error, rebase_on, Rig, NOT_AN_ANCHOR};
+use super::metric::{point_error, rebase_on, Rig};
 use rayon::prelude::*;
 use sinew_core::clip::nlerp;
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -333,7 +333,7 @@ struct SubtreeState<'a, 'p> {
     /// Worked out at the first try (the channels the source holds at their bind values need
     /// none), the anchors rebased on `origins` ([`Rig::rebase`]).
     model: Option<Vec<Vec<Affine3A>>>,
-    /// Per source time, per root: the origin the error points are about.
+    /// Per source time, per anchor: the origin the error points are about.
     origins: &'a [Vec3],
     /// Per joint: itself, then its descendants in skeleton order (the rig's).
     subtree: &'a [Vec<usize>],
@@ -576,7 +576,7 @@ fn reduce_posed(
                     Some(p) => m.get(p as usize).copied().unwrap_or(Affine3A::IDENTITY) * local,
                     None => local,
                 };
-                if let Some(&slot) = rig.anchor_slot.get(j).filter(|&&s| s != NOT_AN_ANCHOR) {
+                if let Some(slot) = rig.anchor_of(j) {
                     rebase_on(&mut model, rig.origins_at(origins, k), slot);
                 }
                 m.push(model);

@@ -14,7 +14,7 @@
 //! buffers only.
 
 use super::eval::{point_distance, Eval};
-use super::metric::{exceeds, rebase_on, NOT_AN_ANCHOR};
+use super::metric::{exceeds, rebase_on};
 use super::quantize::{raw_rotation, Kind, Quant};
 use sinew_core::clip::{nlerp, normalize_rotation};
 use sinew_core::glam::{Affine3A, Quat, Vec3};
@@ -61,7 +61,7 @@ pub(super) struct Trial {
     /// The subtree's joints, in subtree order.
     rows: Vec<Row>,
     /// The position in `rows` of the rig's anchor the subtree holds ([`NONE`] if none), and its
-    /// position among the anchors ([`super::metric::Rig::rebase`]).
+    /// position among the anchors ([`super::metric::Rig::rebase`]; 0 without one).
     anchor_row: usize,
     anchor_slot: usize,
     /// Per joint, its subtree's rows once looked up ([`Trial::set_rows`]), for the layout at this
@@ -323,16 +323,13 @@ impl Trial {
         self.rows.extend_from_slice(&self.row_cache[self.j]);
         self.nsub = self.rows.len();
         // A subtree holds at most one anchor (one per root).
-        let slots = &e.ctx.rig.anchor_slot;
+        let rig = e.ctx.rig;
         (self.anchor_row, self.anchor_slot) = self
             .rows
             .iter()
             .enumerate()
-            .find_map(|(n, row)| {
-                let slot = slots.get(row.d).copied().unwrap_or(NOT_AN_ANCHOR);
-                (slot != NOT_AN_ANCHOR).then_some((n, slot))
-            })
-            .unwrap_or((NONE, NOT_AN_ANCHOR));
+            .find_map(|(n, row)| rig.anchor_of(row.d).map(|slot| (n, slot)))
+            .unwrap_or((NONE, 0));
         self.slot_quant.clear();
         if self.rot {
             let nc = e.layout.comps.len();

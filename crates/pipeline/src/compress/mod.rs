@@ -52,14 +52,28 @@
 //!    smallest is measured from that budget and gets step 4's refinement, and the result (or, if
 //!    the runtime sampler does not measure it within the limits, the unrefined one) is kept.
 //!
-//! Steps 1 to 5 first run on a *thinned* source when that leaves out at least a fifth of its key
+//! Steps 1 to 5 first run on the source's *frames*: its key times on the grid of its sample rate,
+//! when those leave out at least a fifth of its times (a glTF file keyed at a rate: the file's own
+//! keys, the importer's added times between them left out). Not when the frames themselves,
+//! interpolated as the runtime interpolates them, leave some joint's limit at a time between them
+//! (then nothing keyed on frames alone holds). The result is measured at every source time; if it
+//! does not hold, the search runs again on the frames and the times where it did not, at a smaller
+//! share of the tolerance (`FRAME_ROUNDS`: 99%, 95%, 90%, 80%); the first that holds is the
+//! result (for `Max`, one of its candidates). A search on every imported time spends part of the
+//! tolerance on key reduction at the added times, where the runtime's nlerp between frames parts
+//! from the file's slerp, and keeps keys between frames and more bits; on motion captures exported
+//! to glTF the result on the frames, checked at the added times, is 0.54-1.03x as large, 14% smaller
+//! in all (docs/performance.md, session 30).
+//!
+//! Otherwise steps 1 to 5 run on a *thinned* source when that leaves out at least a fifth of its key
 //! times: the source without the times where it is within 1% of the tolerance of linear
 //! interpolation between the times kept (key reduction of the source itself; importers add key
 //! times where a file's own interpolation needs them far more finely than any compression
 //! tolerance: a glTF slerp to 2e-6 rad), with 99% of the tolerance. The result is kept only if it
 //! holds at every time of the whole source (measured as the final check of step 5 measures it);
 //! otherwise the search runs again on the whole source. So the tolerance holds at every source key
-//! time either way, and the search measures fewer times where the source has more than it needs.
+//! time whichever way was taken, and the search measures fewer times where the source has more
+//! than it needs.
 //!
 //! `CompressOptions::effort` ([`Effort`]) sets how hard step 5 searches: `Fast` refines the one
 //! candidate without the refinement's graded first rounds, `Default` with them, `Max` also every
@@ -106,6 +120,8 @@
 #[cfg(test)]
 mod anchor_tests;
 mod eval;
+#[cfg(test)]
+mod frames_tests;
 mod metric;
 mod options;
 mod quantize;

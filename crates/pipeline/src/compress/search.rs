@@ -2,7 +2,8 @@
 
 use super::eval::{add_probe, Ctx, Eval, Probes, Sampled, PROBES};
 use super::metric::{
-    clip_extent, errors_against, joint_limits, measure, skeleton_extent, within_limits, Rig,
+    clip_extent, errors_against, exceeds, joint_limits, measure, skeleton_extent, within_limits,
+    Rig,
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
@@ -552,9 +553,10 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 /// time of the source it was searched on (time-major, one per joint).
 type Found = (usize, Clip, Vec<f32>);
 
-/// The search on a source of thinned times first, then (when it found nothing that holds at every
-/// source time, or for `Max`) on the whole source; the smallest result, with its errors at every
-/// source time. `whole`: the source sampled at its times.
+/// The search on the source's frames first ([`frames_first`]; its result, when one holds, for
+/// `Fast` and `Default`), then on a source of thinned times, then (when it found nothing that
+/// holds at every source time, or for `Max`) on the whole source; the smallest result, with its
+/// errors at every source time. `whole`: the source sampled at its times.
 fn search(
     source: &Clip,
     whole: &Sampled,
@@ -580,6 +582,28 @@ fn search(
     let mut found: Vec<Found> = Vec::new();
     let times = source.times();
     let (src, origins) = (&*whole.points, whole.origins.as_slice());
+    let at_frames = |options: &CompressOptions| {
+        frames_first(
+            source,
+            rig,
+            src,
+            origins,
+            tolerance,
+            |clip, sampled, tolerance| on(clip, Some(sampled), tolerance, options),
+        )
+    };
+    found.extend(at_frames(options));
+    if !found.is_empty() && options.effort != Effort::Max {
+        return found.pop();
+    }
+    if options.effort == Effort::Max {
+        // The default's result on the frames too, so that `Max` is never larger.
+        let default = CompressOptions {
+            effort: Effort::Default,
+            ..options.clone()
+        };
+        found.extend(at_frames(&default));
+    }
     if let Some(thin) = thinned(source, rig, src, origins, Some(&whole.poses), tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // Its errors at every source time (those at the thinned times are the search's), kept
@@ -611,6 +635,99 @@ fn search(
         }
     }
     best
+}
+
+/// The fractions of the tolerance the search on the source's frames gets, round after round
+/// ([`frames_first`]): a round that does not hold at every source time is followed by one that
+/// also measures the times where it did not, at the next fraction. Measured on 44 clips of motion
+/// capture exported to glTF (docs/performance.md, session 30): one fraction (0.99) left 8 of them
+/// failing after three rounds, this ladder 3 of them after four.
+pub(super) const FRAME_ROUNDS: [f32; 4] = [0.99, 0.95, 0.9, 0.8];
+
+/// The indices of `source`'s *frames*: its key times on the grid of its sample rate (from its
+/// first time), the first and last time always among them; `None` when they are not at most four
+/// fifths of its times. Importers add times between a file's own keys where its interpolation
+/// needs them (a glTF slerp to within 2e-6 rad), and a file keyed at a rate has its own keys on
+/// that grid, the added ones off it: a time is on the grid within a thousandth of a frame (the
+/// importers add at most 256 times to a frame; exporters write frame times a few f32 steps from
+/// the nearest float, 8 on Bandai Namco's captures through sinew's own export) or 16 f32 steps of
+/// the time, whichever is larger. Either way of missing (a frame left off, an added time taken as
+/// one) costs only work: every result is measured at every time.
+pub(super) fn frames(source: &Clip) -> Option<Vec<usize>> {
+    let times = source.times();
+    let rate = f64::from(source.sample_rate());
+    let (&first, &last) = (times.first()?, times.last()?);
+    if !(rate.is_finite() && rate > 0.0) {
+        return None;
+    }
+    let on_grid = |t: f32| {
+        let x = (f64::from(t) - f64::from(first)) * rate;
+        let off = (x - x.round()).abs() / rate;
+        off <= (1e-3 / rate).max(16.0 * f64::from(f32::EPSILON) * f64::from(t.abs()))
+    };
+    let kept: Vec<usize> = times
+        .iter()
+        .enumerate()
+        .filter(|&(_, &t)| t == first || t == last || on_grid(t))
+        .map(|(i, _)| i)
+        .collect();
+    (kept.len() * 5 <= times.len() * 4).then_some(kept)
+}
+
+/// The search on the source's [`frames`] alone, kept only where its result holds at every source
+/// time: a round searches the frames (and the times earlier rounds found over their limits) at
+/// the next fraction of [`FRAME_ROUNDS`], and its result is measured at every time; the first that
+/// holds is returned. `None` at once when the clip has no frames apart from its times, or when the
+/// frames themselves, interpolated as the runtime does, leave some joint's limit at a time
+/// between them (nothing keyed on the frames alone can then hold there); and after the last round.
+///
+/// Why: a search on every imported time spends part of the tolerance on key reduction at the
+/// added times, where nlerp between frames parts from the file's slerp, and so keeps keys between
+/// frames and more bits; measured on motion captures exported to glTF, the result on the frames,
+/// checked at the added times, is 0.5-0.8x as large for a fraction of the work (docs/performance.md,
+/// session 30). The guarantee is the same: within the tolerance at every imported key time.
+/// `search_at`: the search on a plain clip, sampled, at a tolerance.
+pub(super) fn frames_first(
+    source: &Clip,
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
+    tolerance: f32,
+    search_at: impl Fn(&Clip, &Sampled, f32) -> Option<Found>,
+) -> Option<Found> {
+    let mut kept = frames(source)?;
+    let times = source.times();
+    let limits = joint_limits(src, rig.skeleton.len(), tolerance);
+    let over_limits = |errors: &[f32]| -> Vec<usize> {
+        errors
+            .chunks(limits.len().max(1))
+            .enumerate()
+            .filter(|(_, at)| at.iter().zip(&limits).any(|(&e, &l)| exceeds(e, l)))
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let plain_at = |kept: &[usize]| {
+        let mut work = Work::from_plain(source);
+        work.keep(kept);
+        work.plain(source)
+    };
+    if !over_limits(&errors_against(rig, src, origins, &plain_at(&kept)?, times)).is_empty() {
+        return None;
+    }
+    for fraction in FRAME_ROUNDS {
+        let clip = plain_at(&kept)?;
+        let sampled = Sampled::new(rig, &clip, clip.times());
+        let (size, c, _) = search_at(&clip, &sampled, tolerance * fraction)?;
+        let errors = errors_against(rig, src, origins, &c, times);
+        let over = over_limits(&errors);
+        if over.is_empty() {
+            return Some((size, c, errors));
+        }
+        kept.extend(over);
+        kept.sort_unstable();
+        kept.dedup();
+    }
+    None
 }
 
 /// Fraction of the tolerance within which the thinned source of [`thinned`] follows the source

@@ -894,7 +894,7 @@ fn a_rotation_lever_reaches_through_joints_that_do_not_compensate() {
 
 /// [`swing`] with `extra` slerped keys inserted in every interval, as an importer adds keys where a
 /// file's own interpolation needs them.
-fn densified_swing(skeleton: &Skeleton, keys: usize, extra: usize) -> Clip {
+pub(super) fn densified_swing(skeleton: &Skeleton, keys: usize, extra: usize) -> Clip {
     let coarse = swing(skeleton, keys).to_plain();
     let times = coarse.times();
     let rig = Rig::new(&coarse, Some(skeleton), 0.1).unwrap();

@@ -1,0 +1,246 @@
+//! Unit tests of the search on a clip's frames ([`super::search::frames`] and the search that
+//! starts from them).
+
+#![allow(clippy::unwrap_used)]
+use super::metric::*;
+use super::options::*;
+use super::reduce::Work;
+use super::search::*;
+use super::tests::{chain, densified_swing};
+use sinew_core::glam::{Quat, Vec3};
+use sinew_core::{Clip, Curve, TrackCurves};
+
+/// Every `extra + 1`-th index of a densified clip of `keys` keys.
+fn frame_indices(keys: usize, extra: usize) -> Vec<usize> {
+    (0..keys).map(|k| k * (extra + 1)).collect()
+}
+
+#[test]
+fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
+    let skeleton = chain(6, 0.3);
+    let dense = densified_swing(&skeleton, 31, 7).to_plain();
+    assert_eq!(dense.times().len(), 241);
+    assert_eq!(frames(&dense), Some(frame_indices(31, 7)));
+    // A clip keyed at its rate only: nothing to leave out.
+    let plain = densified_swing(&skeleton, 31, 0).to_plain();
+    assert_eq!(plain.times().len(), 31);
+    assert_eq!(frames(&plain), None);
+    // Frame times a few f32 steps from k / 30 (as exporters write them) are frames still.
+    let times: Vec<f32> = (0..31)
+        .flat_map(|k| {
+            let t = k as f32 / 30.0;
+            let off = f32::from_bits(t.to_bits() + 8);
+            [if k == 0 { t } else { off }, t + 0.5 / 30.0]
+        })
+        .take(61)
+        .collect();
+    let tracks = vec![TrackCurves {
+        joint: "j0".into(),
+        rotation: Curve::new(
+            times.clone(),
+            times.iter().map(|&t| Quat::from_rotation_y(t)).collect(),
+        ),
+        ..Default::default()
+    }];
+    let clip = Clip::from_curves("offset", times[60], 30.0, false, false, tracks).unwrap();
+    let found = frames(&clip.to_plain()).unwrap();
+    assert_eq!(found, (0..31).map(|k| 2 * k).collect::<Vec<_>>());
+}
+
+#[test]
+fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
+    let skeleton = chain(6, 0.3);
+    let clip = densified_swing(&skeleton, 31, 7).to_plain();
+    let options = CompressOptions {
+        tolerance: Some(0.001),
+        error_distance: Some(0.1),
+        ..CompressOptions::default()
+    };
+    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
+    assert!(c.is_compressed());
+    // Within the tolerance at every time of the source, the 210 between the frames included.
+    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.001, "error {worst}");
+    assert_eq!(r.max_error, worst);
+    // Searched on the frames: every key it kept is one.
+    let frame_times: Vec<f32> = frame_indices(31, 7)
+        .into_iter()
+        .map(|i| clip.times()[i])
+        .collect();
+    assert!(
+        c.times().iter().all(|t| frame_times.contains(t)),
+        "{:?}",
+        c.times()
+    );
+    // It came from the search on the frames, which holds in its first round here.
+    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
+    let poses = rig.poses(&clip, clip.times());
+    let (src, origins) = rig.source_points(&poses);
+    let tries = std::cell::Cell::new(0);
+    let on_frames = frames_first(
+        &clip,
+        &rig,
+        &src,
+        &origins,
+        0.001,
+        |frames, sampled, tol| {
+            tries.set(tries.get() + 1);
+            assert_eq!(frames.times(), &frame_times[..]);
+            assert!((tol - 0.001 * FRAME_ROUNDS[0]).abs() < 1e-9);
+            compress_work(
+                &mut Work::from_plain(frames),
+                frames,
+                Some(sampled),
+                &rig,
+                tol,
+                true,
+                &options,
+                true,
+            )
+        },
+    )
+    .unwrap();
+    assert_eq!(tries.get(), 1);
+    assert_eq!(on_frames.0, r.compressed_bytes);
+    assert_eq!(on_frames.2.len(), clip.times().len() * skeleton.len());
+    // The search on every time of the source keeps keys between the frames and is larger.
+    let whole = compress_work(
+        &mut Work::from_plain(&clip),
+        &clip,
+        None,
+        &rig,
+        0.001,
+        true,
+        &options,
+        true,
+    )
+    .unwrap();
+    assert!(
+        r.compressed_bytes < whole.0,
+        "{} vs {}",
+        r.compressed_bytes,
+        whole.0
+    );
+    assert!(whole.1.times().iter().any(|t| !frame_times.contains(t)));
+}
+
+/// A chain turning by up to `amplitude` rad between keys 0.25 s apart, with `extra` slerped keys
+/// between every two (as the glTF importer adds them), its sample rate 4.
+fn fast_turns(joints: usize, keys: usize, extra: usize, amplitude: f32) -> Clip {
+    let skeleton = chain(joints, 0.3);
+    let coarse: Vec<Vec<Quat>> = (0..joints)
+        .map(|j| {
+            let axis = Vec3::new(1.0, j as f32 * 0.37, 0.5).normalize();
+            (0..keys)
+                .map(|k| Quat::from_axis_angle(axis, amplitude * ((k + j) as f32 * 1.3).sin()))
+                .collect()
+        })
+        .collect();
+    let mut times = Vec::new();
+    let mut values: Vec<Vec<Quat>> = vec![Vec::new(); joints];
+    for k in 0..keys {
+        let steps = if k + 1 < keys { extra + 1 } else { 1 };
+        for i in 0..steps {
+            let u = i as f32 / (extra + 1) as f32;
+            times.push((k as f32 + u) * 0.25);
+            for (j, v) in values.iter_mut().enumerate() {
+                let b = coarse[j].get(k + 1).copied().unwrap_or(coarse[j][k]);
+                v.push(coarse[j][k].slerp(b, u));
+            }
+        }
+    }
+    let tracks = skeleton
+        .names()
+        .iter()
+        .zip(values)
+        .map(|(name, rotation)| TrackCurves {
+            joint: name.clone(),
+            rotation: Curve::new(times.clone(), rotation),
+            ..Default::default()
+        })
+        .collect();
+    Clip::from_curves("turns", *times.last().unwrap(), 4.0, false, false, tracks).unwrap()
+}
+
+#[test]
+fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
+    let skeleton = chain(4, 0.3);
+    // Turns of up to 1.2 rad a key: nlerp between the frames is far from their slerp.
+    let clip = fast_turns(4, 9, 15, 1.2).to_plain();
+    assert_eq!(frames(&clip), Some(frame_indices(9, 15)));
+    let options = CompressOptions {
+        tolerance: Some(0.001),
+        error_distance: Some(0.1),
+        ..CompressOptions::default()
+    };
+    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
+    assert!(c.is_compressed());
+    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.001, "error {worst}");
+    assert_eq!(r.max_error, worst);
+    // The frames alone, nlerped, are past the limits between them: not searched at all.
+    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
+    let poses = rig.poses(&clip, clip.times());
+    let (src, origins) = rig.source_points(&poses);
+    let none = frames_first(&clip, &rig, &src, &origins, 0.001, |_, _, _| {
+        panic!("searched frames that cannot hold")
+    });
+    assert!(none.is_none());
+    // It needs keys between the frames, which the search on the frames alone cannot keep.
+    let frame_times: Vec<f32> = frame_indices(9, 15)
+        .into_iter()
+        .map(|i| clip.times()[i])
+        .collect();
+    assert!(c.times().iter().any(|t| !frame_times.contains(t)));
+}
+
+#[test]
+fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
+    let Some(path) = sinew_testdata::corpus_file("gltf/SimpleSkin.gltf") else {
+        return;
+    };
+    let scene = sinew_import::import_path(&path, &Default::default()).unwrap();
+    let asset = crate::compile::compile(&scene).unwrap();
+    let (clip, skeleton) = (&asset.clips[0], asset.skeleton.as_ref().unwrap());
+    // The file's one sampler keys 0, 0.5, ..., 5.5 s (its input accessor), LINEAR rotations of up
+    // to 90 degrees apart: the importer adds times between them for its slerp.
+    let file_keys: Vec<f32> = (0..12).map(|k| k as f32 * 0.5).collect();
+    let indices: Vec<usize> = file_keys
+        .iter()
+        .map(|k| clip.times().iter().position(|t| t == k).unwrap())
+        .collect();
+    assert!(clip.times().len() > 5 * 12 / 4, "{}", clip.times().len());
+    assert_eq!(frames(clip), Some(indices));
+    let options = CompressOptions::peers();
+    let (c, r) = compress_clip(clip, Some(skeleton), &options);
+    assert!(c.is_compressed());
+    // Within the tolerance at every imported time, the added ones included.
+    let errors = measure(clip, &c, Some(skeleton), 0.1);
+    assert_eq!(errors.len(), clip.times().len() * skeleton.len());
+    let worst = errors.into_iter().fold(0.0f32, f32::max);
+    assert!(worst <= 0.001, "error {worst}");
+    // No larger than the search on every imported time (both 140 bytes; session 29's output,
+    // from the thinned source, was 144).
+    let rig = Rig::new(clip, Some(skeleton), 0.1).unwrap();
+    let whole = compress_work(
+        &mut Work::from_plain(clip),
+        clip,
+        None,
+        &rig,
+        0.001,
+        true,
+        &options,
+        true,
+    )
+    .unwrap();
+    assert!(
+        r.compressed_bytes <= whole.0,
+        "{} vs {}",
+        r.compressed_bytes,
+        whole.0
+    );
+}

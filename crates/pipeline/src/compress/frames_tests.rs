@@ -8,11 +8,32 @@ use super::reduce::Work;
 use super::search::*;
 use super::tests::{chain, densified_swing};
 use sinew_core::glam::{Quat, Vec3};
-use sinew_core::{Clip, Curve, TrackCurves};
+use sinew_core::{Clip, Curve, Skeleton, TrackCurves};
 
 /// Every `extra + 1`-th index of a densified clip of `keys` keys.
 fn frame_indices(keys: usize, extra: usize) -> Vec<usize> {
     (0..keys).map(|k| k * (extra + 1)).collect()
+}
+
+/// `clip` compressed at 0.001 @ 0.1, checked within the tolerance at every one of its times by
+/// [`measure`] (which the report's max error is).
+fn compressed_within(
+    clip: &Clip,
+    skeleton: &Skeleton,
+) -> (CompressOptions, Clip, ClipCompressionReport) {
+    let options = CompressOptions {
+        tolerance: Some(0.001),
+        error_distance: Some(0.1),
+        ..CompressOptions::default()
+    };
+    let (c, r) = compress_clip(clip, Some(skeleton), &options);
+    assert!(c.is_compressed());
+    let worst = measure(clip, &c, Some(skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.001, "error {worst}");
+    assert_eq!(r.max_error, worst);
+    (options, c, r)
 }
 
 #[test]
@@ -51,19 +72,8 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
 fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
     let skeleton = chain(6, 0.3);
     let clip = densified_swing(&skeleton, 31, 7).to_plain();
-    let options = CompressOptions {
-        tolerance: Some(0.001),
-        error_distance: Some(0.1),
-        ..CompressOptions::default()
-    };
-    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
-    assert!(c.is_compressed());
     // Within the tolerance at every time of the source, the 210 between the frames included.
-    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
-        .into_iter()
-        .fold(0.0f32, f32::max);
-    assert!(worst <= 0.001, "error {worst}");
-    assert_eq!(r.max_error, worst);
+    let (options, c, r) = compressed_within(&clip, &skeleton);
     // Searched on the frames: every key it kept is one.
     let frame_times: Vec<f32> = frame_indices(31, 7)
         .into_iter()
@@ -170,18 +180,7 @@ fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
     // Turns of up to 1.2 rad a key: nlerp between the frames is far from their slerp.
     let clip = fast_turns(4, 9, 15, 1.2).to_plain();
     assert_eq!(frames(&clip), Some(frame_indices(9, 15)));
-    let options = CompressOptions {
-        tolerance: Some(0.001),
-        error_distance: Some(0.1),
-        ..CompressOptions::default()
-    };
-    let (c, r) = compress_clip(&clip, Some(&skeleton), &options);
-    assert!(c.is_compressed());
-    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
-        .into_iter()
-        .fold(0.0f32, f32::max);
-    assert!(worst <= 0.001, "error {worst}");
-    assert_eq!(r.max_error, worst);
+    let (_, c, _) = compressed_within(&clip, &skeleton);
     // The frames alone, nlerped, are past the limits between them: not searched at all.
     let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
     let poses = rig.poses(&clip, clip.times());

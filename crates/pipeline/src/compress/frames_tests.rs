@@ -243,3 +243,24 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
         whole.0
     );
 }
+
+#[test]
+fn holds_against_agrees_with_the_errors_at_every_time() {
+    let skeleton = chain(4, 0.3);
+    let clip = fast_turns(4, 9, 15, 1.2).to_plain();
+    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
+    let poses = rig.poses(&clip, clip.times());
+    let (src, origins) = rig.source_points(&poses);
+    let limits = joint_limits(&src, skeleton.len(), 0.001);
+    let mut work = Work::from_plain(&clip);
+    work.keep(&frames(&clip).unwrap());
+    let on_frames = work.plain(&clip).unwrap();
+    for (candidate, expected) in [(&clip, true), (&on_frames, false)] {
+        let errors = errors_against(&rig, &src, &origins, candidate, clip.times());
+        assert_eq!(within_limits(&errors, &limits), expected);
+        assert_eq!(
+            holds_against(&rig, &src, &origins, candidate, clip.times(), &limits),
+            expected
+        );
+    }
+}

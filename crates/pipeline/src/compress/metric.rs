@@ -523,6 +523,28 @@ pub(super) fn runtime_points(
     }
 }
 
+/// Whether `candidate` is within `limits` (per joint) at every one of `times`, stopping at the
+/// first time it is not (one pass of the runtime's sampler over the times, in order).
+pub(super) fn holds_against(
+    rig: &Rig,
+    src: &[Vec<[Vec3; 3]>],
+    origins: &[Vec3],
+    candidate: &Clip,
+    times: &[f32],
+    limits: &[f32],
+) -> bool {
+    let mut holds = true;
+    runtime_points(rig, candidate, times, origins, |k, pts| {
+        holds = src.get(k).is_some_and(|s| {
+            point_error(s, pts)
+                .zip(limits)
+                .all(|(e, &l)| !exceeds(e, l))
+        });
+        !holds
+    });
+    holds
+}
+
 /// True when `error` is above `limit` or not a number.
 pub(super) fn exceeds(error: f32, limit: f32) -> bool {
     error.is_nan() || error > limit

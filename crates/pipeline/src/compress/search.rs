@@ -2,8 +2,8 @@
 
 use super::eval::{add_probe, Ctx, Eval, Probes, Sampled, PROBES};
 use super::metric::{
-    clip_extent, errors_against, exceeds, joint_limits, measure, skeleton_extent, within_limits,
-    Rig,
+    clip_extent, errors_against, exceeds, holds_against, joint_limits, measure, skeleton_extent,
+    within_limits, Rig,
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
@@ -711,7 +711,7 @@ pub(super) fn frames_first(
         work.keep(kept);
         work.plain(source)
     };
-    if !over_limits(&errors_against(rig, src, origins, &plain_at(&kept)?, times)).is_empty() {
+    if !holds_against(rig, src, origins, &plain_at(&kept)?, times, &limits) {
         return None;
     }
     for fraction in FRAME_ROUNDS {

@@ -51,9 +51,15 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
         .flat_map(|k| {
             let t = k as f32 / 30.0;
             let off = f32::from_bits(t.to_bits() + 8);
-            [if k == 0 { t } else { off }, t + 0.5 / 30.0]
+            let between = |q: f32| t + q / 30.0;
+            [
+                if k == 0 { t } else { off },
+                between(0.25),
+                between(0.5),
+                between(0.75),
+            ]
         })
-        .take(61)
+        .take(121)
         .collect();
     let tracks = vec![TrackCurves {
         joint: "j0".into(),
@@ -63,9 +69,13 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
         ),
         ..Default::default()
     }];
-    let clip = Clip::from_curves("offset", times[60], 30.0, false, false, tracks).unwrap();
+    let clip = Clip::from_curves("offset", times[120], 30.0, false, false, tracks).unwrap();
     let found = frames(&clip.to_plain()).unwrap();
-    assert_eq!(found, (0..31).map(|k| 2 * k).collect::<Vec<_>>());
+    assert_eq!(found, (0..31).map(|k| 4 * k).collect::<Vec<_>>());
+    // Frames that are more than half of the times are not searched first.
+    let half = densified_swing(&skeleton, 31, 1).to_plain();
+    assert_eq!(half.times().len(), 61);
+    assert_eq!(frames(&half), None);
 }
 
 #[test]

@@ -53,8 +53,8 @@
 //!    the runtime sampler does not measure it within the limits, the unrefined one) is kept.
 //!
 //! Steps 1 to 5 first run on the source's *frames*: its key times on the grid of its sample rate,
-//! when those leave out at least a fifth of its times (a glTF file keyed at a rate: the file's own
-//! keys, the importer's added times between them left out). Not when the frames themselves,
+//! when those are at most half of its times (a glTF file keyed at a rate: the file's own keys,
+//! the importer's added times between them left out). Not when the frames themselves,
 //! interpolated as the runtime interpolates them, leave some joint's limit at a time between them
 //! (then nothing keyed on frames alone holds). The result is measured at every source time; if it
 //! does not hold, the search runs again on the frames and the times where it did not, at a smaller
@@ -62,8 +62,8 @@
 //! result (for `Max`, one of its candidates). A search on every imported time spends part of the
 //! tolerance on key reduction at the added times, where the runtime's nlerp between frames parts
 //! from the file's slerp, and keeps keys between frames and more bits; on motion captures exported
-//! to glTF the result on the frames, checked at the added times, is 0.54-1.03x as large, 14% smaller
-//! in all (docs/performance.md, session 30).
+//! to glTF the result on the frames, checked at the added times, is 0.54-1.02x as large, 9-14%
+//! smaller in all (docs/performance.md, session 30).
 //!
 //! Otherwise steps 1 to 5 run on a *thinned* source when that leaves out at least a fifth of its key
 //! times: the source without the times where it is within 1% of the tolerance of linear

@@ -36,6 +36,30 @@ fn compressed_within(
     (options, c, r)
 }
 
+/// The search on every time of `clip` (compensated, bind values allowed), as `search` runs it
+/// when nothing searched first holds.
+fn whole_search(clip: &Clip, rig: &Rig, options: &CompressOptions) -> Found {
+    compress_work(
+        &mut Work::from_plain(clip),
+        clip,
+        None,
+        rig,
+        0.001,
+        true,
+        options,
+        true,
+    )
+    .unwrap()
+}
+
+/// `clip`'s rig at 0.1 and its error points and origins at its own times.
+fn rig_points(clip: &Clip, skeleton: &Skeleton) -> (Rig, Vec<Vec<[Vec3; 3]>>, Vec<Vec3>) {
+    let rig = Rig::new(clip, Some(skeleton), 0.1).unwrap();
+    let poses = rig.poses(clip, clip.times());
+    let (src, origins) = rig.source_points(&poses);
+    (rig, src, origins)
+}
+
 #[test]
 fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
     let skeleton = chain(6, 0.3);
@@ -95,9 +119,7 @@ fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
         c.times()
     );
     // It came from the search on the frames, which holds in its first round here.
-    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
-    let poses = rig.poses(&clip, clip.times());
-    let (src, origins) = rig.source_points(&poses);
+    let (rig, src, origins) = rig_points(&clip, &skeleton);
     let tries = std::cell::Cell::new(0);
     let on_frames = frames_first(
         &clip,
@@ -126,17 +148,7 @@ fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
     assert_eq!(on_frames.0, r.compressed_bytes);
     assert_eq!(on_frames.2.len(), clip.times().len() * skeleton.len());
     // The search on every time of the source keeps keys between the frames and is larger.
-    let whole = compress_work(
-        &mut Work::from_plain(&clip),
-        &clip,
-        None,
-        &rig,
-        0.001,
-        true,
-        &options,
-        true,
-    )
-    .unwrap();
+    let whole = whole_search(&clip, &rig, &options);
     assert!(
         r.compressed_bytes < whole.0,
         "{} vs {}",
@@ -192,9 +204,7 @@ fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
     assert_eq!(frames(&clip), Some(frame_indices(9, 15)));
     let (_, c, _) = compressed_within(&clip, &skeleton);
     // The frames alone, nlerped, are past the limits between them: not searched at all.
-    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
-    let poses = rig.poses(&clip, clip.times());
-    let (src, origins) = rig.source_points(&poses);
+    let (rig, src, origins) = rig_points(&clip, &skeleton);
     let none = frames_first(&clip, &rig, &src, &origins, 0.001, |_, _, _| {
         panic!("searched frames that cannot hold")
     });
@@ -234,18 +244,8 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
     assert!(worst <= 0.001, "error {worst}");
     // No larger than the search on every imported time (both 140 bytes; session 29's output,
     // from the thinned source, was 144).
-    let rig = Rig::new(clip, Some(skeleton), 0.1).unwrap();
-    let whole = compress_work(
-        &mut Work::from_plain(clip),
-        clip,
-        None,
-        &rig,
-        0.001,
-        true,
-        &options,
-        true,
-    )
-    .unwrap();
+    let (rig, _, _) = rig_points(clip, skeleton);
+    let whole = whole_search(clip, &rig, &options);
     assert!(
         r.compressed_bytes <= whole.0,
         "{} vs {}",
@@ -258,9 +258,7 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
 fn holds_against_agrees_with_the_errors_at_every_time() {
     let skeleton = chain(4, 0.3);
     let clip = fast_turns(4, 9, 15, 1.2).to_plain();
-    let rig = Rig::new(&clip, Some(&skeleton), 0.1).unwrap();
-    let poses = rig.poses(&clip, clip.times());
-    let (src, origins) = rig.source_points(&poses);
+    let (rig, src, origins) = rig_points(&clip, &skeleton);
     let limits = joint_limits(&src, skeleton.len(), 0.001);
     let mut work = Work::from_plain(&clip);
     work.keep(&frames(&clip).unwrap());

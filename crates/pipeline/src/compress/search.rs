@@ -551,7 +551,7 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 
 /// A result of [`compress_work`] and [`search`]: its record size, the clip, and its errors at every
 /// time of the source it was searched on (time-major, one per joint).
-type Found = (usize, Clip, Vec<f32>);
+pub(super) type Found = (usize, Clip, Vec<f32>);
 
 /// The search on the source's frames first ([`frames_first`]; its result, when one holds, for
 /// `Fast` and `Default`), then on a source of thinned times, then (when it found nothing that

@@ -2,6 +2,7 @@
 //! starts from them).
 
 #![allow(clippy::unwrap_used)]
+use super::eval::Sampled;
 use super::metric::*;
 use super::options::*;
 use super::reduce::Work;
@@ -36,20 +37,50 @@ fn compressed_within(
     (options, c, r)
 }
 
-/// The search on every time of `clip` (compensated, bind values allowed), as `search` runs it
-/// when nothing searched first holds.
-fn whole_search(clip: &Clip, rig: &Rig, options: &CompressOptions) -> Found {
+/// The search on every time of `clip` at `tol` (compensated, bind values allowed), as `search`
+/// runs it on the frames and, when nothing searched first holds, on the whole source.
+fn search_on(
+    clip: &Clip,
+    sampled: Option<&Sampled>,
+    rig: &Rig,
+    tol: f32,
+    options: &CompressOptions,
+) -> Option<Found> {
     compress_work(
         &mut Work::from_plain(clip),
         clip,
-        None,
+        sampled,
         rig,
-        0.001,
+        tol,
         true,
         options,
         true,
     )
-    .unwrap()
+}
+
+/// [`frames_first`] on `clip` at 0.001 with the search `search` runs ([`search_on`]), shown each
+/// round's frames, tolerance and round number first (`look`); with the number of times each round
+/// searched.
+fn searched_on_frames(
+    clip: &Clip,
+    skeleton: &Skeleton,
+    options: &CompressOptions,
+    look: impl Fn(&Clip, f32, usize),
+) -> (Option<Found>, Vec<usize>) {
+    let (rig, src, origins) = rig_points(clip, skeleton);
+    let seen = std::cell::RefCell::new(Vec::new());
+    let found = frames_first(clip, &rig, &src, &origins, 0.001, |frames, sampled, tol| {
+        let round = seen.borrow().len();
+        look(frames, tol, round);
+        seen.borrow_mut().push(frames.times().len());
+        search_on(frames, Some(sampled), &rig, tol, options)
+    });
+    (found, seen.into_inner())
+}
+
+/// [`search_on`] every time of `clip` at 0.001.
+fn whole_search(clip: &Clip, rig: &Rig, options: &CompressOptions) -> Found {
+    search_on(clip, None, rig, 0.001, options).unwrap()
 }
 
 /// `clip`'s rig at 0.1 and its error points and origins at its own times.
@@ -119,34 +150,15 @@ fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
         c.times()
     );
     // It came from the search on the frames, which holds in its first round here.
-    let (rig, src, origins) = rig_points(&clip, &skeleton);
-    let tries = std::cell::Cell::new(0);
-    let on_frames = frames_first(
-        &clip,
-        &rig,
-        &src,
-        &origins,
-        0.001,
-        |frames, sampled, tol| {
-            tries.set(tries.get() + 1);
-            assert_eq!(frames.times(), &frame_times[..]);
-            assert!((tol - 0.001 * FRAME_ROUNDS[0]).abs() < 1e-9);
-            compress_work(
-                &mut Work::from_plain(frames),
-                frames,
-                Some(sampled),
-                &rig,
-                tol,
-                true,
-                &options,
-                true,
-            )
-        },
-    )
-    .unwrap();
-    assert_eq!(tries.get(), 1);
+    let (on_frames, rounds) = searched_on_frames(&clip, &skeleton, &options, |frames, tol, _| {
+        assert_eq!(frames.times(), &frame_times[..]);
+        assert!((tol - 0.001 * FRAME_ROUNDS[0]).abs() < 1e-9);
+    });
+    let on_frames = on_frames.unwrap();
+    assert_eq!(rounds.len(), 1);
     assert_eq!(on_frames.0, r.compressed_bytes);
     assert_eq!(on_frames.2.len(), clip.times().len() * skeleton.len());
+    let (rig, _, _) = rig_points(&clip, &skeleton);
     // The search on every time of the source keeps keys between the frames and is larger.
     let whole = whole_search(&clip, &rig, &options);
     assert!(
@@ -161,12 +173,26 @@ fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
 /// A chain turning by up to `amplitude` rad between keys 0.25 s apart, with `extra` slerped keys
 /// between every two (as the glTF importer adds them), its sample rate 4.
 fn fast_turns(joints: usize, keys: usize, extra: usize, amplitude: f32) -> Clip {
+    turns_held_after(joints, keys, keys, extra, amplitude)
+}
+
+/// [`fast_turns`] whose keys from `moving` on hold the value of the key before.
+fn turns_held_after(
+    joints: usize,
+    keys: usize,
+    moving: usize,
+    extra: usize,
+    amplitude: f32,
+) -> Clip {
     let skeleton = chain(joints, 0.3);
     let coarse: Vec<Vec<Quat>> = (0..joints)
         .map(|j| {
             let axis = Vec3::new(1.0, j as f32 * 0.37, 0.5).normalize();
             (0..keys)
-                .map(|k| Quat::from_axis_angle(axis, amplitude * ((k + j) as f32 * 1.3).sin()))
+                .map(|k| {
+                    let k = k.min(moving.max(1) - 1);
+                    Quat::from_axis_angle(axis, amplitude * ((k + j) as f32 * 1.3).sin())
+                })
                 .collect()
         })
         .collect();
@@ -194,6 +220,33 @@ fn fast_turns(joints: usize, keys: usize, extra: usize, amplitude: f32) -> Clip 
         })
         .collect();
     Clip::from_curves("turns", *times.last().unwrap(), 4.0, false, false, tracks).unwrap()
+}
+
+#[test]
+fn frames_that_interpolation_reproduces_are_left_out_of_the_search() {
+    let skeleton = chain(4, 0.3);
+    // 41 frames, 3 slerped times between each two; the turns stop at the 9th frame and the
+    // rest hold (an export that keys a curve on every frame of a fine grid).
+    let clip = turns_held_after(4, 41, 9, 3, 0.2).to_plain();
+    assert_eq!(clip.times().len(), 161);
+    let all_frames = frame_indices(41, 3);
+    assert_eq!(frames(&clip), Some(all_frames.clone()));
+    let frame_times: Vec<f32> = all_frames.iter().map(|&i| clip.times()[i]).collect();
+    let (options, c, r) = compressed_within(&clip, &skeleton);
+    // The search saw the frames that linear interpolation does not reproduce: those of the
+    // turns, and the ends of the hold.
+    let (on_frames, seen) = searched_on_frames(&clip, &skeleton, &options, |frames, tol, round| {
+        assert!(frames.times().iter().all(|t| frame_times.contains(t)));
+        assert!(frames.times().contains(&clip.times()[160]));
+        let share = FRAME_ROUNDS[round] * (1.0 - THINNING);
+        assert!((tol - 0.001 * share).abs() < 1e-9, "{tol}");
+    });
+    let on_frames = on_frames.unwrap();
+    assert!(!seen.is_empty() && seen[0] <= 12, "{seen:?}");
+    assert_eq!(on_frames.0, r.compressed_bytes);
+    // Every key the encoder kept is a frame, within the tolerance at all 161 times
+    // (`compressed_within`).
+    assert!(c.times().iter().all(|t| frame_times.contains(t)));
 }
 
 #[test]

@@ -54,7 +54,9 @@
 //!
 //! Steps 1 to 5 first run on the source's *frames*: its key times on the grid of its sample rate,
 //! when those are at most half of its times (a glTF file keyed at a rate: the file's own keys,
-//! the importer's added times between them left out). Not when the frames themselves,
+//! the importer's added times between them left out), less the frames that linear interpolation
+//! between the others reproduces within 1% of the tolerance when that is a fifth of them or more
+//! (then at 99% of the tolerance, as the thinned source below). Not when the frames themselves,
 //! interpolated as the runtime interpolates them, leave some joint's limit at a time between them
 //! (then nothing keyed on frames alone holds). The result is measured at every source time; if it
 //! does not hold, the search runs again on the frames and the times where it did not, at a smaller

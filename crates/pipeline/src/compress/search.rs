@@ -604,7 +604,9 @@ fn search(
         };
         found.extend(at_frames(&default));
     }
-    if let Some(thin) = thinned(source, rig, src, origins, Some(&whole.poses), tolerance) {
+    let work = Work::from_plain(source);
+    let poses = Some(whole.poses.as_slice());
+    if let Some((_, thin)) = thinned(work, source, rig, src, origins, poses, tolerance) {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // Its errors at every source time (those at the thinned times are the search's), kept
         // with the clip when each is within its joint's limit: they are the report's.
@@ -694,6 +696,13 @@ pub(super) fn frames(source: &Clip) -> Option<Vec<usize>> {
 /// checked at the added times, is 0.54-1.02x as large (14% smaller in all), in 0.17-0.5x the time
 /// where the first round holds and up to 2.65x where the rounds fail (docs/performance.md,
 /// session 30). The guarantee is the same: within the tolerance at every imported key time.
+///
+/// Frames that linear interpolation between the frames kept reproduces within [`THINNING`] x the
+/// tolerance are left out first, as [`thinned`] leaves out times (when that is at least a fifth of
+/// them), and every round's fraction is then of the rest of the tolerance: a file keyed on every
+/// step of a fine grid (sinew's own export of ninja.ms3d: 8,627 frames on a 1,600 Hz grid of 17,459
+/// imported times, 3,998 after this) was searched on all of them, 2x the time of the thinned
+/// search before the frames (docs/performance.md, session 31).
 /// `search_at`: the search on a plain clip, sampled, at a tolerance.
 pub(super) fn frames_first(
     source: &Clip,
@@ -723,9 +732,28 @@ pub(super) fn frames_first(
     if !holds_against(rig, src, origins, &clip, times, &limits) {
         return None;
     }
+    let mut sampled = Sampled::new(rig, &clip, clip.times());
+    // Frames that linear interpolation between their neighbours reproduces (an export that keys
+    // a curve densely on a fine grid) are left out as [`thinned`] leaves out times, for the same
+    // share of the tolerance.
+    let mut share = 1.0;
+    let thin_frames = thinned(
+        Work::from_plain(&clip),
+        &clip,
+        rig,
+        &sampled.points,
+        &sampled.origins,
+        Some(&sampled.poses),
+        tolerance,
+    );
+    if let Some((thin, thin_clip)) = thin_frames {
+        kept = thin.iter().map(|&i| kept[i]).collect();
+        clip = thin_clip;
+        sampled = Sampled::new(rig, &clip, clip.times());
+        share = 1.0 - THINNING;
+    }
     for fraction in FRAME_ROUNDS {
-        let sampled = Sampled::new(rig, &clip, clip.times());
-        let (size, c, _) = search_at(&clip, &sampled, tolerance * fraction)?;
+        let (size, c, _) = search_at(&clip, &sampled, tolerance * fraction * share)?;
         let errors = errors_against(rig, src, origins, &c, times);
         let over = over_limits(&errors);
         if over.is_empty() {
@@ -735,6 +763,7 @@ pub(super) fn frames_first(
         kept.sort_unstable();
         kept.dedup();
         clip = plain_at(&kept)?;
+        sampled = Sampled::new(rig, &clip, clip.times());
     }
     None
 }
@@ -747,23 +776,23 @@ pub(super) const THINNING: f32 = 0.01;
 
 /// The source without the key times where it is within [`THINNING`] x the tolerance of linear
 /// interpolation between the times kept (key reduction of the source itself, whole keys), when that
-/// leaves out at least a fifth of its times; else `None`. Importers add times where a file's own
-/// interpolation needs them to a precision far finer than a compression tolerance (a glTF slerp to
-/// within 2e-6 rad: Fox's Walk has 157 key times for 18 glTF keys), and the search's cost grows with
-/// the times it measures. A result of the search on the thinned source is kept only if it holds at
-/// every time of the whole source.
-/// `src`, `origins`: the source's error points at its times and their origins ([`Rig::source_points`]);
-/// `poses`: its poses at its times, when known.
+/// leaves out at least a fifth of its times, with the indices of the times kept; else `None`.
+/// Importers add times where a file's own interpolation needs them to a precision far finer than a
+/// compression tolerance (a glTF slerp to within 2e-6 rad: Fox's Walk has 157 key times for 18
+/// glTF keys), and the search's cost grows with the times it measures. A result of the search on
+/// the thinned source is kept only if it holds at every time of the whole source.
+/// `work`: the source's, as [`Work::from_plain`] gives it; `src`, `origins`: the source's error
+/// points at its times and their origins ([`Rig::source_points`]); `poses`: its poses at its times,
+/// when known.
 pub(super) fn thinned(
+    work: Work,
     source: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
     origins: &[Vec3],
     poses: Option<&[Vec<Transform>]>,
     tolerance: f32,
-) -> Option<Clip> {
-    let times = source.times();
-    let work = Work::from_plain(source);
+) -> Option<(Vec<usize>, Clip)> {
     let kept = reduce_keys(
         &work,
         source,
@@ -773,12 +802,12 @@ pub(super) fn thinned(
         poses,
         tolerance * THINNING,
     );
-    if kept.len() * 5 > times.len() * 4 {
+    if kept.len() * 5 > source.times().len() * 4 {
         return None;
     }
-    let mut w = work;
-    w.keep(&kept);
-    w.plain(source)
+    let mut work = work;
+    work.keep(&kept);
+    Some((kept, work.plain(source)?))
 }
 
 /// Compresses one clip within the tolerance (see the module docs) and reports what it reached.

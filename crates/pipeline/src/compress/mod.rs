@@ -60,8 +60,9 @@
 //! interpolated as the runtime interpolates them, leave some joint's limit at a time between them
 //! (then nothing keyed on frames alone holds). The result is measured at every source time; if it
 //! does not hold, the search runs again on the frames and the times where it did not, at a smaller
-//! share of the tolerance (`FRAME_ROUNDS`: 99%, 95%, 90%, 80%); the first that holds is the
-//! result (for `Max`, one of its candidates). A search on every imported time spends part of the
+//! share of the tolerance (`FRAME_ROUNDS`: 99%, 95%, 90%, 80%), unless the source thins (below:
+//! then the thinned source is searched instead); the first that holds is the result (for `Max`,
+//! one of its candidates). A search on every imported time spends part of the
 //! tolerance on key reduction at the added times, where the runtime's nlerp between frames parts
 //! from the file's slerp, and keeps keys between frames and more bits; on motion captures exported
 //! to glTF the result on the frames, checked at the added times, is 0.54-1.02x as large, 9-14%

@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use sinew_core::format::clip_record_size;
 use sinew_core::glam::Vec3;
 use sinew_core::{Channel, Clip, Skeleton, Transform};
+use std::cell::OnceCell;
 
 /// `f` over `items`, in order; in parallel (rayon) when `par`. The same results either way.
 fn map_in_order<T: Send, R: Send>(
@@ -557,6 +558,13 @@ pub(super) type Found = (usize, Clip, Vec<f32>);
 /// `Fast` and `Default`), then on a source of thinned times, then (when it found nothing that
 /// holds at every source time, or for `Max`) on the whole source; the smallest result, with its
 /// errors at every source time. `whole`: the source sampled at its times.
+///
+/// When the frames' first round does not hold and the source thins, the thinned source is
+/// searched next instead of more rounds: the rounds find the times between frames that matter by
+/// failing at them, a search each; a source that thins has them chosen by its own interpolation
+/// already. Where it does not (captures at 0.001 @ 0.1, whose every time moves), the rounds
+/// are what makes the frames pay (docs/performance.md, session 31: zombie.ms3d's export at the
+/// default tolerance 6,657 -> 6,386 bytes in 0.6x the time, SimpleSkin.gltf 140 -> 144 bytes).
 fn search(
     source: &Clip,
     whole: &Sampled,
@@ -582,6 +590,16 @@ fn search(
     let mut found: Vec<Found> = Vec::new();
     let times = source.times();
     let (src, origins) = (&*whole.points, whole.origins.as_slice());
+    // The thinned source, made when first needed: after a first round on the frames that did not
+    // hold (where the source thins, it is searched instead of more rounds), or after the frames.
+    let thin_source = OnceCell::new();
+    let thin = || {
+        thin_source.get_or_init(|| {
+            let poses = Some(whole.poses.as_slice());
+            let work = Work::from_plain(source);
+            thinned(work, source, rig, src, origins, poses, tolerance)
+        })
+    };
     let at_frames = |options: &CompressOptions| {
         frames_first(
             source,
@@ -589,6 +607,7 @@ fn search(
             src,
             origins,
             tolerance,
+            || thin().is_none(),
             |clip, sampled, tolerance| on(clip, Some(sampled), tolerance, options),
         )
     };
@@ -604,9 +623,7 @@ fn search(
         };
         found.extend(at_frames(&default));
     }
-    let work = Work::from_plain(source);
-    let poses = Some(whole.poses.as_slice());
-    if let Some((_, thin)) = thinned(work, source, rig, src, origins, poses, tolerance) {
+    if let Some((_, thin)) = thin() {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
         // Its errors at every source time (those at the thinned times are the search's), kept
         // with the clip when each is within its joint's limit: they are the report's.
@@ -615,15 +632,15 @@ fn search(
             within_limits(&errors, &limits).then_some((size, c, errors))
         };
         let reduced = tolerance * (1.0 - THINNING);
-        let thin_sampled = Sampled::new(rig, &thin, thin.times());
-        found.extend(on(&thin, Some(&thin_sampled), reduced, options).and_then(holds));
+        let thin_sampled = Sampled::new(rig, thin, thin.times());
+        found.extend(on(thin, Some(&thin_sampled), reduced, options).and_then(holds));
         if options.effort == Effort::Max {
             // The default's result on the thinned source too, so that `Max` is never larger.
             let default = CompressOptions {
                 effort: Effort::Default,
                 ..options.clone()
             };
-            found.extend(on(&thin, Some(&thin_sampled), reduced, &default).and_then(holds));
+            found.extend(on(thin, Some(&thin_sampled), reduced, &default).and_then(holds));
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
@@ -688,7 +705,8 @@ pub(super) fn frames(source: &Clip) -> Option<Vec<usize>> {
 /// the next fraction of [`FRAME_ROUNDS`], and its result is measured at every time; the first that
 /// holds is returned. `None` at once when [`frames`] finds none to search, or when the frames
 /// themselves, interpolated as the runtime does, leave some joint's limit at a time between them
-/// (nothing keyed on the frames alone can then hold there); and after the last round.
+/// (nothing keyed on the frames alone can then hold there); after a first round that does not
+/// hold when `more_rounds` (asked then, once) says no; and after the last round.
 ///
 /// Why: a search on every imported time spends part of the tolerance on key reduction at the
 /// added times, where nlerp between frames parts from the file's slerp, and so keeps keys between
@@ -710,6 +728,7 @@ pub(super) fn frames_first(
     src: &[Vec<[Vec3; 3]>],
     origins: &[Vec3],
     tolerance: f32,
+    more_rounds: impl FnOnce() -> bool,
     search_at: impl Fn(&Clip, &Sampled, f32) -> Option<Found>,
 ) -> Option<Found> {
     let mut kept = frames(source)?;
@@ -728,6 +747,7 @@ pub(super) fn frames_first(
         work.keep(kept);
         work.plain(source)
     };
+    let mut more_rounds = Some(more_rounds);
     let mut clip = plain_at(&kept)?;
     if !holds_against(rig, src, origins, &clip, times, &limits) {
         return None;
@@ -758,6 +778,11 @@ pub(super) fn frames_first(
         let over = over_limits(&errors);
         if over.is_empty() {
             return Some((size, c, errors));
+        }
+        if let Some(ask) = more_rounds.take() {
+            if !ask() {
+                return None;
+            }
         }
         kept.extend(over);
         kept.sort_unstable();

@@ -5,9 +5,9 @@
 //! paths or paths on disk). Every clip of each file is compressed RUNS times at the peers' settings
 //! (0.001 units at 0.1 units) inside a rayon pool of one thread (`SINEW_THREADS=N` for N); prints per
 //! clip the median and fastest time in milliseconds, the joints x keys, the compressed bytes and the
-//! max error. `SINEW_EFFORT=fast|max` picks another effort, `SINEW_SETTING=default` the default
-//! (relative) tolerance. Like the `sinew` binary, it starts with [`sinew_pipeline::warm_heap`]
-//! and warms each pool thread's heap ([`sinew_pipeline::warm_thread_heap`]) unless
+//! max error (`SINEW_CLIP=NAME`: only the clips of that name). `SINEW_EFFORT=fast|max` picks another
+//! effort, `SINEW_SETTING=default` the default (relative) tolerance. Like the `sinew` binary, it
+//! starts with [`sinew_pipeline::warm_heap`] and warms each pool thread's heap ([`sinew_pipeline::warm_thread_heap`]) unless
 //! `SINEW_NO_WARM_HEAP` is set. The time is the encoder's on the pool thread that runs it
 //! (as `convert --timings` reports it and ACL its compression time); `SINEW_TIME_HANDOFF=1` times
 //! the hand-off to the pool and back too, as this example did until session 19.
@@ -49,6 +49,8 @@ fn main() {
     // to the pool and back (how sessions 10 to 19 measured: a pool thread that has gone to sleep
     // can take milliseconds to start on a shared machine, which `convert` pays once per process).
     let with_handoff = std::env::var_os("SINEW_TIME_HANDOFF").is_some();
+    // SINEW_CLIP: only the clips of that name (to profile one clip of a file).
+    let only = std::env::var("SINEW_CLIP").ok();
     println!("| file | clip | joints x keys | bytes | median ms | fastest ms | max error |");
     println!("|---|---|---|---:|---:|---:|---:|");
     for file in files {
@@ -63,7 +65,11 @@ fn main() {
             }
         };
         let asset = compile(&scene).unwrap();
-        for clip in &asset.clips {
+        for clip in asset
+            .clips
+            .iter()
+            .filter(|c| only.as_ref().is_none_or(|n| c.name() == n))
+        {
             let mut times = Vec::with_capacity(runs);
             let mut report = None;
             for _ in 0..runs {

@@ -7,10 +7,11 @@
 //! clip the median and fastest time in milliseconds, the joints x keys, the compressed bytes and the
 //! max error (`SINEW_CLIP=NAME`: only the clips of that name). `SINEW_EFFORT=fast|max` picks another
 //! effort, `SINEW_SETTING=default` the default (relative) tolerance. Like the `sinew` binary, it
-//! starts with [`sinew_pipeline::warm_heap`] and warms each pool thread's heap ([`sinew_pipeline::warm_thread_heap`]) unless
-//! `SINEW_NO_WARM_HEAP` is set. The time is the encoder's on the pool thread that runs it
-//! (as `convert --timings` reports it and ACL its compression time); `SINEW_TIME_HANDOFF=1` times
-//! the hand-off to the pool and back too, as this example did until session 19.
+//! starts with [`sinew_pipeline::warm_heap`] and warms each pool thread's heap
+//! ([`sinew_pipeline::warm_thread_heap`]) unless `SINEW_NO_WARM_HEAP` is set. The time is the
+//! encoder's on the pool thread that runs it (as `convert --timings` reports it and ACL its
+//! compression time); `SINEW_TIME_HANDOFF=1` times the hand-off to the pool and back too, as this
+//! example did until session 19.
 
 #![allow(clippy::unwrap_used)]
 

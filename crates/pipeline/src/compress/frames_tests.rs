@@ -334,8 +334,7 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
     assert!(on_frames.is_none() && asked.get());
     assert_eq!(rounds.get(), 1);
     let poses = rig.poses(clip, clip.times());
-    let work = Work::from_plain(clip);
-    let (_, thin) = thinned(work, clip, &rig, &src, &origins, Some(&poses), 0.001).unwrap();
+    let (_, thin) = thinned(clip, &rig, &src, &origins, Some(&poses), 0.001).unwrap();
     let on_thin = search_on(&thin, None, &rig, 0.001 * (1.0 - THINNING), &options).unwrap();
     assert_eq!(r.compressed_bytes, on_thin.0);
 }

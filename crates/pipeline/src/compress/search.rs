@@ -596,8 +596,7 @@ fn search(
     let thin = || {
         thin_source.get_or_init(|| {
             let poses = Some(whole.poses.as_slice());
-            let work = Work::from_plain(source);
-            thinned(work, source, rig, src, origins, poses, tolerance)
+            thinned(source, rig, src, origins, poses, tolerance)
         })
     };
     let at_frames = |options: &CompressOptions| {
@@ -758,7 +757,6 @@ pub(super) fn frames_first(
     // share of the tolerance.
     let mut share = 1.0;
     let thin_frames = thinned(
-        Work::from_plain(&clip),
         &clip,
         rig,
         &sampled.points,
@@ -772,7 +770,11 @@ pub(super) fn frames_first(
         sampled = Sampled::new(rig, &clip, clip.times());
         share = 1.0 - THINNING;
     }
-    for fraction in FRAME_ROUNDS {
+    for (round, fraction) in FRAME_ROUNDS.into_iter().enumerate() {
+        if round > 0 {
+            clip = plain_at(&kept)?;
+            sampled = Sampled::new(rig, &clip, clip.times());
+        }
         let (size, c, _) = search_at(&clip, &sampled, tolerance * fraction * share)?;
         let errors = errors_against(rig, src, origins, &c, times);
         let over = over_limits(&errors);
@@ -787,8 +789,6 @@ pub(super) fn frames_first(
         kept.extend(over);
         kept.sort_unstable();
         kept.dedup();
-        clip = plain_at(&kept)?;
-        sampled = Sampled::new(rig, &clip, clip.times());
     }
     None
 }
@@ -806,11 +806,9 @@ pub(super) const THINNING: f32 = 0.01;
 /// compression tolerance (a glTF slerp to within 2e-6 rad: Fox's Walk has 157 key times for 18
 /// glTF keys), and the search's cost grows with the times it measures. A result of the search on
 /// the thinned source is kept only if it holds at every time of the whole source.
-/// `work`: the source's, as [`Work::from_plain`] gives it; `src`, `origins`: the source's error
-/// points at its times and their origins ([`Rig::source_points`]); `poses`: its poses at its times,
-/// when known.
+/// `src`, `origins`: the source's error points at its times and their origins
+/// ([`Rig::source_points`]); `poses`: its poses at its times, when known.
 pub(super) fn thinned(
-    work: Work,
     source: &Clip,
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
@@ -818,6 +816,7 @@ pub(super) fn thinned(
     poses: Option<&[Vec<Transform>]>,
     tolerance: f32,
 ) -> Option<(Vec<usize>, Clip)> {
+    let mut work = Work::from_plain(source);
     let kept = reduce_keys(
         &work,
         source,
@@ -830,7 +829,6 @@ pub(super) fn thinned(
     if kept.len() * 5 > source.times().len() * 4 {
         return None;
     }
-    let mut work = work;
     work.keep(&kept);
     Some((kept, work.plain(source)?))
 }

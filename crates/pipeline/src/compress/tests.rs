@@ -938,8 +938,7 @@ fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() 
     let (src, origins) = rig.source_points(&poses);
     // At 0.01 the slerped keys are within 1% of the tolerance of their neighbours' interpolation:
     // the thinned source keeps far fewer than four fifths of the times, all of them source times.
-    let work = Work::from_plain(&clip);
-    let (kept, thin) = thinned(work.clone(), &clip, &rig, &src, &origins, None, 0.01).unwrap();
+    let (kept, thin) = thinned(&clip, &rig, &src, &origins, None, 0.01).unwrap();
     assert_eq!(kept.len(), thin.times().len());
     assert!(
         thin.times().len() * 5 < clip.times().len() * 4,
@@ -962,5 +961,5 @@ fn the_search_runs_on_thinned_times_and_its_result_holds_at_every_source_time() 
     assert_eq!(r.max_error, worst);
     assert!(c.times().iter().all(|t| clip.times().contains(t)));
     // At a tolerance where slerp and nlerp differ by more than 1% of it, nothing is left out.
-    assert!(thinned(work, &clip, &rig, &src, &origins, None, 1e-7).is_none());
+    assert!(thinned(&clip, &rig, &src, &origins, None, 1e-7).is_none());
 }

@@ -525,7 +525,7 @@ pub fn mesh_lods(
         Some(o) => {
             // The plain builds are also compared under poses of the scene's own clips, and the
             // clips' size sets how many meshes have them.
-            let motion = sinew_pipeline::lod::scene_motion(clips, skeleton);
+            let motion = sinew_pipeline::lod::scene_motion_for(clips, skeleton, meshes, tuning);
             let (_, times) = sinew_pipeline::lod::generate_mesh_lods_timed(
                 meshes, skeleton, materials, o, tuning, &motion,
             )

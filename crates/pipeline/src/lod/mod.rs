@@ -65,7 +65,10 @@ use measure::{
     with_points, Measured,
 };
 pub use measure::{largest_range_scale, mesh_scale};
-pub use motion::{clip_joint_keys, plain_work, reference_poses, scene_motion, SceneMotion};
+pub use motion::{
+    clip_joint_keys, plain_work, reference_pose_count, reference_poses, scene_motion,
+    scene_motion_for, SceneMotion,
+};
 use motion::{plain_builds_of, PlainSet};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
@@ -704,18 +707,25 @@ fn build_lods_timed(
                     // No more triangles than the build it would replace (or the target's).
                     let fewer = best.0.indices.len().max(3 * (target + slack));
                     if again.indices.len() <= fewer {
-                        let closer = measure_below(
+                        // Kept when closer by `score`, or, where it ties (the farthest test
+                        // pose is not where the repair moved anything), when it is no farther at
+                        // rest and closer in the reference poses, which it was built for.
+                        let kept = measure_below(
                             &source.positions,
                             &again.indices,
                             &base_points,
                             &base_grid,
                             limit,
                         )
-                        .filter(|m2| score(from, &again.indices, m2, limit).is_some());
-                        if let Some(m2) = closer {
-                            if reference_score(from, &again.indices) <= reference_limit.max(limit) {
-                                best = (again, m2, best.2);
-                            }
+                        .and_then(|m2| {
+                            let s2 = score(from, &again.indices, &m2, next_above(limit))?;
+                            let r2 = reference_score(from, &again.indices);
+                            let better = s2 < limit
+                                || (m2.distance() <= best.1.distance() && r2 < reference_limit);
+                            (better && r2 <= reference_limit.max(limit)).then_some(m2)
+                        });
+                        if let Some(m2) = kept {
+                            best = (again, m2, best.2);
                         }
                     }
                 }
@@ -806,6 +816,12 @@ fn build_lods_timed(
     Ok(chain)
 }
 
+/// The next f32 above `x`, for a non-negative finite `x` (`f32::next_up`, newer than the MSRV): a
+/// limit that lets a distance equal to `x` through.
+fn next_above(x: f32) -> f32 {
+    f32::from_bits(x.to_bits() + 1)
+}
+
 /// The pose of the largest distance in `distances` (the first of equals) and that distance.
 fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
     distances
@@ -845,7 +861,7 @@ pub fn generate_lods_tuned(
     options: &LodOptions,
     tuning: &LodTuning,
 ) -> Result<Vec<MeshLodReport>, LodError> {
-    let motion = scene_motion(&scene.clips, scene.skeleton.as_ref());
+    let motion = scene_motion_for(&scene.clips, scene.skeleton.as_ref(), &scene.meshes, tuning);
     let Scene {
         meshes,
         skeleton,

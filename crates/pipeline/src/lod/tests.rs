@@ -142,8 +142,8 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
     let tuning = LodTuning::default();
     let with_keys = |joint_keys: usize| {
         let motion = SceneMotion {
-            poses: Vec::new(),
             joint_keys,
+            ..SceneMotion::default()
         };
         plain_builds_of(&meshes, None, &tuning, &motion)
     };
@@ -158,8 +158,8 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
         ..LodTuning::default()
     };
     let motion = SceneMotion {
-        poses: Vec::new(),
         joint_keys: 1_000_000,
+        ..SceneMotion::default()
     };
     assert_eq!(plain_builds_of(&meshes, None, &none, &motion), [Off; 5]);
     let every = LodTuning {
@@ -724,5 +724,74 @@ fn the_per_range_sloppy_build_clusters_each_range_alone_after_its_first_pass() {
         built.indices.len() < first_total,
         "{} of {first_total}",
         built.indices.len()
+    );
+}
+
+/// The reference poses are picked farthest first from the middles of 64 parts of a clip, so a
+/// brief pose unlike the rest (here the arm swung 90 degrees for a fortieth of the clip, between
+/// two middles of eighths) is among them, where poses at fixed times (the middles of eighths, as
+/// until session 32) pass it by.
+#[test]
+fn reference_poses_include_a_brief_pose_unlike_the_rest() {
+    use sinew_core::glam::{Mat4, Quat};
+    use sinew_core::{Curve, TrackCurves};
+    use sinew_scene::SceneClip;
+    let arm_at = Transform {
+        translation: Vec3::X,
+        ..Transform::IDENTITY
+    };
+    let skeleton = Skeleton::new(
+        vec!["root".into(), "arm".into()],
+        vec![None, Some(0)],
+        vec![Transform::IDENTITY, arm_at],
+        vec![Mat4::IDENTITY, Mat4::from_translation(-Vec3::X)],
+    )
+    .unwrap();
+    let turn = |degrees: f32| Quat::from_rotation_z(degrees.to_radians());
+    let keys = [
+        (0.0, 0.0),
+        (1.5, 20.0),
+        (3.9, 0.0),
+        (4.0, 90.0),
+        (4.1, 0.0),
+        (6.5, 20.0),
+        (8.0, 0.0),
+    ];
+    let clip = SceneClip {
+        name: "swing".into(),
+        duration: 8.0,
+        sample_rate: 30.0,
+        looping: false,
+        additive: false,
+        tracks: vec![TrackCurves {
+            joint: "arm".into(),
+            rotation: Curve {
+                times: keys.iter().map(|k| k.0).collect(),
+                values: keys.iter().map(|k| turn(k.1)).collect(),
+            },
+            ..Default::default()
+        }],
+    };
+    let angle = |pose: &[Transform]| pose[1].rotation.angle_between(Quat::IDENTITY).to_degrees();
+    // The premise: at the middles of eighths the arm is never swung past 25 degrees.
+    let compiled = clip.to_clip().unwrap();
+    let binding = sinew_core::ClipBinding::new(&compiled, &skeleton);
+    for k in 0..8 {
+        let mut pose = skeleton.bind_local().to_vec();
+        let at = 8.0 * (k as f32 + 0.5) / 8.0;
+        sinew_core::Sampler::new()
+            .sample(&compiled, &binding, &skeleton, at, &mut pose)
+            .unwrap();
+        assert!(angle(&pose) < 25.0, "at {at}: {}", angle(&pose));
+    }
+    let poses = reference_poses(std::slice::from_ref(&clip), &skeleton);
+    assert_eq!(poses.len(), 8);
+    let widest = poses.iter().map(|p| angle(p)).fold(0.0f32, f32::max);
+    // The middles of 64 parts nearest the swing are 3.9375 and 4.0625 s: 33.75 degrees.
+    assert!(widest > 33.0, "widest reference pose {widest} degrees");
+    assert_eq!(
+        poses,
+        reference_poses(&[clip], &skeleton),
+        "same poses every time"
     );
 }

@@ -78,8 +78,9 @@
 //! time whichever way was taken, and the search measures fewer times where the source has more
 //! than it needs.
 //!
-//! `CompressOptions::effort` ([`Effort`]) sets how hard step 5 searches: `Fast` refines the one
-//! candidate without the refinement's graded first rounds, `Default` with them, `Max` also every
+//! `CompressOptions::effort` ([`Effort`]) sets how hard steps 2 and 5 search: `Fast` reduces keys
+//! at one budget of the three and refines its candidate without the refinement's graded first
+//! rounds, `Default` with all three and those rounds, `Max` also every
 //! layout measured, more key budgets and segment lengths, and the whole source as well as the
 //! thinned one, with the default's result among its candidates (so never a larger result).
 //!

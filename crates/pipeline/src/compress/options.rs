@@ -17,6 +17,13 @@ pub(super) const SHORT_CLIP: usize = 256;
 /// refined it changed 4 of the corpus's 74 clips (-2.1% to +0.7%, -0.026% in total without it)
 /// and 6 of 776 Half-Life clips (-0.003%) for 1-9% of the encoder's work; `max` still tries it.
 pub(super) const KEY_BUDGETS: [f32; 3] = [0.5, 0.7, 0.85];
+/// The one key-reduction budget [`Effort::Fast`] tries (of [`KEY_BUDGETS`]): one set of kept keys,
+/// one first-width ladder, one layout family. Over 88 clips (the corpus, its MS3D/MDL/SMD exports
+/// and 31 motion captures) it alone gives the three budgets' result on 65, 1.6% more bytes in
+/// all at 0.001 @ 0.1 and 0.1% at the default tolerance, for 0.77x / 0.87x the encoder's time;
+/// 0.5 alone +6.7% / +1.9% (Fox Walk past gltf2ozz's size), 0.85 alone smaller in all but slower
+/// than the three (1.32x at 0.001 @ 0.1) (docs/performance.md, session 32).
+pub(super) const FAST_KEY_BUDGET: f32 = 0.7;
 /// Rungs of the first-width ladder (factors of 2^(1/4)) below the tolerance at which the first
 /// layout's ladder starts: at half the tolerance. A uniform budget is per component, and a joint's
 /// error gathers several components' and its parents', so clips with real motion pass 3 to 7 rungs
@@ -39,8 +46,9 @@ pub(super) const MAX_DESCENDED: usize = 8;
 
 /// How much searching the encoder does for a small clip (every effort keeps the tolerance).
 ///
-/// - `Fast`: the default's candidate, refined without the graded first rounds
-///   ([`super::search::THRESHOLDS`]): every round at the full limit.
+/// - `Fast`: one key budget ([`FAST_KEY_BUDGET`]) where the default tries three, and its
+///   candidate refined without the graded first rounds ([`super::search::THRESHOLDS`]): every
+///   round at the full limit.
 /// - `Default`: the search of the module docs.
 /// - `Max`: the default's candidates (the same ones, so never a larger result) and more key budgets
 ///   ([`MAX_EXTRA_KEY_BUDGETS`]) and segment lengths ([`MAX_EXTRA_SEGMENTS`]), with up to

@@ -7,8 +7,8 @@ use super::metric::{
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FIRST_RUNGS_DOWN, KEY_BUDGETS, MAX_DESCENDED,
-    MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, FIRST_RUNGS_DOWN, KEY_BUDGETS,
+    MAX_DESCENDED, MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
@@ -299,7 +299,8 @@ pub(super) fn compress_work(
             .chain(&MAX_EXTRA_KEY_BUDGETS)
             .copied()
             .collect(),
-        _ => KEY_BUDGETS.to_vec(),
+        Effort::Fast => vec![FAST_KEY_BUDGET],
+        Effort::Default => KEY_BUDGETS.to_vec(),
     };
     // The works and layouts of the default search come first, in the default's order, so that
     // `Max` reaches the same candidates for them and can only add to them.

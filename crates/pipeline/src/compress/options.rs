@@ -20,7 +20,7 @@ pub(super) const KEY_BUDGETS: [f32; 3] = [0.5, 0.7, 0.85];
 /// The one key-reduction budget [`Effort::Fast`] tries (of [`KEY_BUDGETS`]): one set of kept keys,
 /// one first-width ladder, one layout family. Over 88 clips (the corpus, its MS3D/MDL/SMD exports
 /// and 31 motion captures) it alone gives the three budgets' result on 65, 1.6% more bytes in
-/// all at 0.001 @ 0.1 and 0.1% at the default tolerance, for 0.77x / 0.87x the encoder's time;
+/// all at 0.001 @ 0.1 and 0.1% at the default tolerance, for 0.87x / 0.86x the encoder's time;
 /// 0.5 alone +6.7% / +1.9% (Fox Walk past gltf2ozz's size), 0.85 alone smaller in all but slower
 /// than the three (1.32x at 0.001 @ 0.1) (docs/performance.md, session 32).
 pub(super) const FAST_KEY_BUDGET: f32 = 0.7;

@@ -383,7 +383,7 @@ const GLTFPACK_RIGGED_FIGURE: (usize, f32) = (228, 0.306);
 /// The plain builds are also compared under poses sampled from the scene's own clips (docs/lod.md,
 /// "How one step is built"): under the two test poses alone the positions-only build won at 228
 /// and tore at 1/8 of the clip (0.648% against gltfpack's 0.306%). The clip times checked here
-/// are not among those sampled (the middles of eighths).
+/// are not among those the reference poses are picked from (the middles of 64 equal parts).
 #[test]
 fn rigged_figure_at_least_as_close_as_gltfpack_in_its_clip() {
     let Some(scene) = load("gltf/RiggedFigure.glb") else {

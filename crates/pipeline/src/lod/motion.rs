@@ -8,6 +8,7 @@
 //! beyond both gets the positions-only build alone ([`PlainSet::Positions`]).
 
 use super::step::LodTuning;
+use crate::compress::skeleton_extent;
 use sinew_core::glam::{Mat4, Vec3};
 use sinew_core::{local_to_model, ClipBinding, Lod, Sampler, Skeleton, Transform};
 use sinew_scene::{Mesh, SceneClip};
@@ -167,8 +168,8 @@ const REFERENCE_POSES: usize = 16;
 const REFERENCE_POSES_PER_CLIP: usize = 8;
 /// The times of a clip its reference poses are picked from: the middles of this many equal parts.
 const POSE_CANDIDATES: usize = 64;
-/// The reach of the points a pose is compared by, as a fraction of the bind pose's extent
-/// ([`joint_points`]).
+/// The reach of the points a pose is compared by, as a fraction of the skeleton's extent
+/// ([`skeleton_extent`], [`joint_points`]).
 const POSE_REACH: f32 = 0.1;
 
 /// The reference poses the plain builds are compared under besides the test poses
@@ -184,12 +185,7 @@ const POSE_REACH: f32 = 0.1;
 pub fn reference_poses(clips: &[SceneClip], skeleton: &Skeleton) -> Vec<Vec<Transform>> {
     let per_clip = reference_poses_per_clip(clips);
     let bind = skeleton.bind_local();
-    let reach = {
-        let at_bind = joint_points(skeleton, bind, 0.0);
-        let lo = at_bind.iter().fold(Vec3::splat(f32::MAX), |m, p| m.min(*p));
-        let hi = at_bind.iter().fold(Vec3::splat(f32::MIN), |m, p| m.max(*p));
-        (hi - lo).length() * POSE_REACH
-    };
+    let reach = skeleton_extent(skeleton) * POSE_REACH;
     let at_bind = joint_points(skeleton, bind, reach);
     let mut poses = Vec::new();
     let mut sampler = Sampler::new();
@@ -205,7 +201,7 @@ pub fn reference_poses(clips: &[SceneClip], skeleton: &Skeleton) -> Vec<Vec<Tran
             continue;
         };
         let binding = ClipBinding::new(&clip, skeleton);
-        let candidates: Vec<(Vec<Transform>, Vec<Vec3>)> = (0..POSE_CANDIDATES)
+        let mut candidates: Vec<(Vec<Transform>, Vec<Vec3>)> = (0..POSE_CANDIDATES)
             .map(|k| {
                 let at = clip.duration() * (k as f32 + 0.5) / POSE_CANDIDATES as f32;
                 let mut locals = bind.to_vec();
@@ -242,7 +238,11 @@ pub fn reference_poses(clips: &[SceneClip], skeleton: &Skeleton) -> Vec<Vec<Tran
             }
         }
         picked.sort_unstable();
-        poses.extend(picked.into_iter().map(|i| candidates[i].0.clone()));
+        poses.extend(
+            picked
+                .into_iter()
+                .map(|i| std::mem::take(&mut candidates[i].0)),
+        );
     }
     poses
 }

@@ -251,6 +251,88 @@ fn far_first(
     far.into_iter().map(|(_, i)| i).collect()
 }
 
+/// The vertices of `indices` in first-use order, one per distinct position (the first): the
+/// vertex behind each point of `distinct(&used_vertices(positions, indices))`, in its order.
+pub(super) fn distinct_used(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
+    let mut seen = vec![false; positions.len()];
+    let used: Vec<u32> = indices
+        .iter()
+        .copied()
+        .filter(|&i| {
+            seen.get_mut(i as usize)
+                .is_some_and(|s| !std::mem::replace(s, true))
+        })
+        .collect();
+    let points: Vec<Vec3> = used.iter().map(|&v| positions[v as usize]).collect();
+    let (count, ids) = position_ids(&points);
+    let mut taken = vec![false; count];
+    used.into_iter()
+        .zip(&ids)
+        .filter(|&(_, &id)| !std::mem::replace(&mut taken[id as usize], true))
+        .map(|(v, _)| v)
+        .collect()
+}
+
+/// The posed check of the default's repair on a skinned mesh beyond the plain builds' bound
+/// (docs/lod.md, "A posed check without a grid per pose"): each of LOD 0's points (`vertices`,
+/// the vertex behind each of `m`'s points) measured, in each pose, against the one triangle of
+/// the build (`indices`) its rest search ended on (`m`'s hints), both skinned: `base_posed` is LOD
+/// 0's vertices under the poses, `source_posed` the build's source's. No point is nearer to
+/// that triangle than to the build's surface, so each distance is an upper bound of the point's
+/// distance in the pose, and exact for a point the build kept (0). Returns the largest over
+/// the poses and the rest positions of that pose's points more than half as far, farthest first
+/// (ties in order), at most [`REPAIR_VERTICES`].
+pub(super) fn hinted_posed_far(
+    m: &Measured,
+    (vertices, rest): (&[u32], &[Vec3]),
+    indices: &[u32],
+    (base_posed, source_posed): (&[Vec<Vec3>], &[Vec<Vec3>]),
+) -> (f32, Vec<Vec3>) {
+    let corner = |posed: &[Vec3], t: u32, k: usize| -> Option<Vec3> {
+        let v = *indices.get(3 * t as usize + k)?;
+        posed.get(v as usize).copied()
+    };
+    let distances = |base: &Vec<Vec3>, source: &Vec<Vec3>| -> Vec<f32> {
+        vertices
+            .iter()
+            .zip(&m.hints)
+            .map(|(&v, &t)| {
+                let tri = [0, 1, 2].map(|k| corner(source, t, k));
+                match (base.get(v as usize), tri) {
+                    (Some(&p), [Some(a), Some(b), Some(c)]) => {
+                        crate::surface::point_triangle_distance(p, a, b, c)
+                    }
+                    _ => 0.0,
+                }
+            })
+            .collect()
+    };
+    let mut worst: (f32, Vec<f32>) = (0.0, Vec::new());
+    for (base, source) in base_posed.iter().zip(source_posed) {
+        let d = distances(base, source);
+        let top = d.iter().copied().fold(0.0f32, f32::max);
+        if top > worst.0 {
+            worst = (top, d);
+        }
+    }
+    let (top, d) = worst;
+    let half = top * 0.5;
+    let mut far: Vec<(f32, usize)> = d
+        .iter()
+        .enumerate()
+        .filter(|&(_, &x)| x > half && x.is_finite())
+        .map(|(i, &x)| (x, i))
+        .collect();
+    far.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    far.truncate(REPAIR_VERTICES);
+    (
+        top,
+        far.into_iter()
+            .filter_map(|(_, i)| rest.get(i).copied())
+            .collect(),
+    )
+}
+
 /// The points of `points` with distinct positions (bit for bit), first occurrences, in order.
 pub(super) fn distinct(points: &[Vec3]) -> Vec<Vec3> {
     let (count, ids) = position_ids(points);
@@ -363,4 +445,21 @@ pub fn largest_range_scale(mesh: &Mesh) -> f32 {
             extent(&used)
         })
         .fold(0.0f32, f32::max)
+}
+
+/// The next f32 above `x`, for a non-negative finite `x` (`f32::next_up`, newer than the MSRV): a
+/// limit that lets a distance equal to `x` through.
+pub(super) fn next_above(x: f32) -> f32 {
+    f32::from_bits(x.to_bits() + 1)
+}
+
+/// The pose of the largest distance in `distances` (the first of equals) and that distance.
+pub(super) fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
+    distances
+        .iter()
+        .enumerate()
+        .fold(None, |w, (k, &d)| match w {
+            Some((_, wd)) if wd >= d => w,
+            _ => Some((k, d)),
+        })
 }

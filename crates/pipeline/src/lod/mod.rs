@@ -44,7 +44,13 @@
 //!   step's own build); then a posed repair build of the best one (LOD 0's farthest vertices in
 //!   the pose where it is farthest locked, kept on the same terms);
 //! - on a static mesh above that bound, the positions-only plain build alone, compared at rest
-//!   (one simplification and one measurement: docs/lod.md, "Static meshes beyond the bound").
+//!   (one simplification and one measurement: docs/lod.md, "Static meshes beyond the bound");
+//! - on a skinned mesh above it, a posed check of the step's build: LOD 0's points measured in
+//!   each reference pose against the build's triangle each one's rest search ended on (an upper
+//!   bound of its distance, no grid per pose); where that is farther than at rest, those
+//!   farthest in the worst pose are locked too and the step built again beside the repair, kept
+//!   when no farther at rest and closer at rest or by that bound (docs/lod.md, "A posed check
+//!   without a grid per pose").
 //!
 //! Simplification only ever selects among existing vertices, so skin weights travel with their vertices
 //! unchanged; the lowest LOD may be cut to fewer influences, renormalised. Every LOD's index order is
@@ -55,14 +61,15 @@
 mod buffers;
 mod measure;
 mod motion;
+mod options;
 mod step;
 mod weld;
 
 use crate::surface::{sample_points, used_vertices, TriangleGrid};
 pub use buffers::{limit_influences, validate_lod};
 use measure::{
-    distinct, far_vertices, lost_below, measure, measure_below, posed_far_vertices, repair_locks,
-    with_points, Measured,
+    distinct, far_vertices, farthest_pose, lost_below, measure, measure_below, next_above,
+    posed_far_vertices, repair_locks, with_points, Measured,
 };
 pub use measure::{largest_range_scale, mesh_scale};
 pub use motion::{
@@ -70,6 +77,7 @@ pub use motion::{
     scene_motion_for, SceneMotion,
 };
 use motion::{plain_builds_of, PlainSet};
+pub use options::{LodError, LodOptions};
 use rayon::prelude::*;
 use sinew_core::glam::Vec3;
 use sinew_core::{Lod, Skeleton, Transform, MAX_INFLUENCES};
@@ -87,83 +95,6 @@ type PosedSource = (Vec<Vec<Vec3>>, Vec<Vec<Vec3>>);
 /// those samples (docs/lod.md: on the corpus and fixtures, LOD 0's centroids and midpoints added at
 /// most 4%, and 20,000 random surface points at most 3%).
 const MEASURE_MARGIN: f32 = 1.1;
-
-/// What to build.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LodOptions {
-    /// Triangle budget of each generated LOD as a fraction of LOD 0's triangles, decreasing.
-    pub ratios: Vec<f32>,
-    /// Largest simplification error allowed, relative to the mesh extent, accumulated along the
-    /// chain (`None`, the default: no limit; each LOD reports the error it reached).
-    pub max_error: Option<f32>,
-    /// Influences per vertex kept in the lowest LOD (1 to 4).
-    pub lowest_lod_influences: usize,
-    /// UV seams hold even where no texture reads the UVs (a mesh to be textured later). By default
-    /// they hold only on a mesh with a textured material range (docs/lod.md, "UVs no texture
-    /// reads"), as gltfpack drops unused texture coordinates unless told to keep them (`-kv`).
-    pub keep_uv_seams: bool,
-}
-
-impl Default for LodOptions {
-    fn default() -> Self {
-        Self {
-            ratios: vec![0.5, 0.25],
-            max_error: None,
-            lowest_lod_influences: MAX_INFLUENCES,
-            keep_uv_seams: false,
-        }
-    }
-}
-
-/// Why LODs could not be built.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum LodError {
-    /// A ratio outside (0, 1].
-    #[error("LOD ratio {0} is not in (0, 1]")]
-    BadRatio(f32),
-    /// Ratios not decreasing.
-    #[error("LOD ratios must decrease: {0:?}")]
-    RatiosNotDecreasing(Vec<f32>),
-    /// Error limit negative or not finite.
-    #[error("LOD error limit {0} must be a finite number >= 0")]
-    BadMaxError(f32),
-    /// Influence count outside 1..=4.
-    #[error("LOD influences must be 1 to 4, not {0}")]
-    BadInfluences(usize),
-    /// The mesh's buffers are inconsistent.
-    #[error("mesh {mesh:?}: {problem}")]
-    BadMesh {
-        /// Mesh name.
-        mesh: String,
-        /// What is wrong.
-        problem: String,
-    },
-}
-
-impl LodOptions {
-    /// Checks the options.
-    pub fn validate(&self) -> Result<(), LodError> {
-        let mut prev = 1.0f32;
-        for &r in &self.ratios {
-            if !(r > 0.0 && r <= 1.0) {
-                return Err(LodError::BadRatio(r));
-            }
-            if r > prev {
-                return Err(LodError::RatiosNotDecreasing(self.ratios.clone()));
-            }
-            prev = r;
-        }
-        if let Some(e) = self.max_error {
-            if !(e.is_finite() && e >= 0.0) {
-                return Err(LodError::BadMaxError(e));
-            }
-        }
-        if !(1..=MAX_INFLUENCES).contains(&self.lowest_lod_influences) {
-            return Err(LodError::BadInfluences(self.lowest_lod_influences));
-        }
-        Ok(())
-    }
-}
 
 /// Optimises LOD 0 in place for the vertex cache and vertex fetch, keeping `source_vertex` in step.
 pub fn optimize_base(mesh: &mut Mesh) -> Result<(), LodError> {
@@ -249,8 +180,8 @@ pub fn build_lods_tuned(
     );
     build_lods_timed(
         mesh,
-        (plain[0] != PlainSet::Off).then_some(&mesh.geometry),
-        plain[0] == PlainSet::Positions,
+        matches!(plain[0], PlainSet::All | PlainSet::Positions).then_some(&mesh.geometry),
+        plain[0],
         skeleton,
         true,
         tuning
@@ -265,13 +196,13 @@ pub fn build_lods_tuned(
 
 /// [`build_lods_tuned`], pushing the wall time in seconds of each level attempted (with its
 /// repair and measurement; a level not built counts when simplification was tried) onto
-/// `seconds`. `plain_input`: LOD 0 as it came in, where plain builds run
-/// ([`motion::PlainSet`]); `positions_only`: only the positions-only one of them.
+/// `seconds`. `plain_input`: LOD 0 as it came in, where plain builds run; `plain`: which of
+/// them, or the posed check alone ([`motion::PlainSet`]).
 #[allow(clippy::too_many_arguments)]
 fn build_lods_timed(
     mesh: &Mesh,
     plain_input: Option<&Lod>,
-    positions_only: bool,
+    plain: PlainSet,
     skeleton: Option<&Skeleton>,
     uvs_read: bool,
     scene_scale: f32,
@@ -281,6 +212,7 @@ fn build_lods_timed(
     seconds: &mut Vec<f64>,
 ) -> Result<LodChain, LodError> {
     options.validate()?;
+    let positions_only = plain == PlainSet::Positions;
     // UVs that no texture reads are not seams: vertices that differ only in UV are welded (each
     // keeps its first copy's UV) and UVs do not weigh in the collapse cost, as gltfpack drops
     // the texture coordinates no material uses before it simplifies.
@@ -332,6 +264,18 @@ fn build_lods_timed(
         &mesh.geometry.positions,
         &mesh.geometry.indices,
     ));
+    // The posed check of the step's repair (`PlainSet::PosedCheck`): LOD 0's vertex behind each
+    // of `base_points`, and LOD 0 under the reference poses.
+    let (check_vertices, check_base) = if plain == PlainSet::PosedCheck && !reference.is_empty() {
+        let g = &mesh.geometry;
+        (
+            measure::distinct_used(&g.positions, &g.indices),
+            step::reference_positions(g, skeleton, reference),
+        )
+    } else {
+        Default::default()
+    };
+    let checked = !check_base.is_empty();
     // The plain builds (`Step::plain`) of every level, when they run, start from LOD 0 in the
     // order it came in (`plain_input`), welded as each step's source is.
     let plain_flat = plain_input.is_some_and(is_flat_soup);
@@ -487,6 +431,21 @@ fn build_lods_timed(
             problem: format!("after welding: {problem}"),
         })?;
         let step = Step::new(&welded, skeleton, tuning);
+        let check_source = if checked {
+            step::reference_positions(&welded, skeleton, reference)
+        } else {
+            Vec::new()
+        };
+        // The largest distance of LOD 0's points from a build under the reference poses, as the
+        // posed check bounds it, and that pose's farthest points.
+        let posed_check = |m: &Measured, indices: &[u32]| {
+            measure::hinted_posed_far(
+                m,
+                (&check_vertices, &base_points),
+                indices,
+                (&check_base, &check_source),
+            )
+        };
         let (step_posed, step_reference) = if plains.is_empty() {
             Default::default()
         } else {
@@ -499,31 +458,89 @@ fn build_lods_timed(
         let build_current = |keep: &Anchors| {
             let built = step.run(target, budget, keep);
             let m = measure(&welded.positions, &built.indices, &base_points, &base_grid);
+            let most = built.indices.len().max(3 * (target + slack));
             // Repair: the attribute terms (normals, UVs, test poses) weigh in meshoptimizer's
             // error and its quadrics let a thin part's tip slide along the part at little cost, so
             // a step can remove a shape feature cheaply. When LOD 0's farthest vertices decide the
             // distance, they are locked (each with a triangle around it) and the step is built
             // again; the closer build with no more triangles is kept.
-            if tuning.repair_far_vertices && m.lost > m.added {
-                let far = far_vertices(&m, &base_points);
+            let rest_far = if tuning.repair_far_vertices && m.lost > m.added {
+                far_vertices(&m, &base_points)
+            } else {
+                Vec::new()
+            };
+            let rest_repair = || {
+                if rest_far.is_empty() {
+                    return None;
+                }
                 let mut more = keep.clone();
-                more.hard = repair_locks(&welded, &far);
+                more.hard = repair_locks(&welded, &rest_far);
                 let again = step.run(target, budget, &more);
-                let fewer = again.indices.len() <= built.indices.len().max(3 * (target + slack));
-                if fewer {
-                    let closer = measure_below(
-                        &welded.positions,
-                        &again.indices,
-                        &base_points,
-                        &base_grid,
-                        m.distance(),
-                    );
-                    if let Some(m2) = closer {
-                        return (again, m2);
-                    }
+                if again.indices.len() > most {
+                    return None;
+                }
+                measure_below(
+                    &welded.positions,
+                    &again.indices,
+                    &base_points,
+                    &base_grid,
+                    m.distance(),
+                )
+                .map(|m2| (again, m2))
+            };
+            // Beyond the plain builds' bound, on a skinned mesh (`PlainSet::PosedCheck`): the
+            // build is checked in the reference poses by the bound of `measure::hinted_posed_far`
+            // and, where that is larger than its rest distance, built again beside the rest
+            // repair (on another core when one is free) with LOD 0's points farthest in the pose
+            // where it is largest locked too (and the rest repair's). That build is kept instead
+            // of the rest repair's choice when no farther at rest (the bound is loose where a
+            // point's rest triangle is not its nearest in the pose: it must not trade rest away),
+            // closer at rest or by the bound, and no farther by the larger of the two (docs/lod.md,
+            // "A posed check without a grid per pose").
+            let posed = (checked && tuning.repair_far_vertices)
+                .then(|| posed_check(&m, &built.indices))
+                .filter(|(bound, far)| !far.is_empty() && *bound > m.distance());
+            let posed_repair = || {
+                let (_, far) = posed.as_ref()?;
+                let mut locked = rest_far.clone();
+                locked.extend_from_slice(far);
+                let mut more = keep.clone();
+                more.hard = repair_locks(&welded, &locked);
+                let again = step.run(target, budget, &more);
+                if again.indices.len() > most {
+                    return None;
+                }
+                // No farther at rest than the first build, at least (the rest repair's choice is
+                // no farther than it either).
+                let m2 = measure_below(
+                    &welded.positions,
+                    &again.indices,
+                    &base_points,
+                    &base_grid,
+                    next_above(m.distance()),
+                )?;
+                let (bound, _) = posed_check(&m2, &again.indices);
+                Some((again, m2, bound))
+            };
+            let (repaired, posed_repaired) = rayon::join(rest_repair, posed_repair);
+            let first_bound = posed.as_ref().map_or(0.0, |p| p.0);
+            let rest_kept = repaired.is_some();
+            let mut best = repaired.unwrap_or((built, m));
+            if let Some((again, m2, bound2)) = posed_repaired {
+                let bound = if rest_kept {
+                    posed_check(&best.1, &best.0.indices).0
+                } else {
+                    first_bound
+                };
+                let (rest, rest2) = (best.1.distance(), m2.distance());
+                if rest2 <= rest
+                    && (rest2 < rest || bound2 < bound)
+                    && rest2.max(bound2) <= rest.max(bound)
+                {
+                    best = (again, m2);
                 }
             }
-            (built, m)
+            best
         };
         // The larger of a build's distances to LOD 0 at rest (`m`, with LOD 0's centroids and
         // edge midpoints measured too) and of LOD 0's vertices from the build under the test
@@ -816,23 +833,6 @@ fn build_lods_timed(
     Ok(chain)
 }
 
-/// The next f32 above `x`, for a non-negative finite `x` (`f32::next_up`, newer than the MSRV): a
-/// limit that lets a distance equal to `x` through.
-fn next_above(x: f32) -> f32 {
-    f32::from_bits(x.to_bits() + 1)
-}
-
-/// The pose of the largest distance in `distances` (the first of equals) and that distance.
-fn farthest_pose(distances: &[f32]) -> Option<(usize, f32)> {
-    distances
-        .iter()
-        .enumerate()
-        .fold(None, |w, (k, &d)| match w {
-            Some((_, wd)) if wd >= d => w,
-            _ => Some((k, d)),
-        })
-}
-
 /// What [`generate_lods`] did to each mesh.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeshLodReport {
@@ -944,7 +944,8 @@ pub fn generate_mesh_lods_timed(
         |(mesh, plain): (&mut Mesh, PlainSet)| -> Result<(MeshLodReport, MeshLodTimes), LodError> {
             let started = std::time::Instant::now();
             // The geometry as it came, before the vertex-cache order: the plain build starts from it.
-            let plain_input = (plain != PlainSet::Off).then(|| mesh.geometry.clone());
+            let plain_input =
+                matches!(plain, PlainSet::All | PlainSet::Positions).then(|| mesh.geometry.clone());
             optimize_base(mesh)?;
             let mut times = MeshLodTimes {
                 optimize: started.elapsed().as_secs_f64(),
@@ -953,7 +954,7 @@ pub fn generate_mesh_lods_timed(
             let chain = build_lods_timed(
                 mesh,
                 plain_input.as_ref(),
-                plain == PlainSet::Positions,
+                plain,
                 skeleton,
                 options.keep_uv_seams || uvs_read(mesh, materials),
                 scene_scale,

@@ -5,7 +5,8 @@
 //! `LodTuning::plain_candidate` (`convert --effort max`); otherwise on a mesh whose work
 //! ([`plain_work`]) is within `LodTuning::plain_work_bound`, and beyond it while the meshes' work
 //! fits in the share the file's clips allow ([`SceneMotion`]; docs/lod.md, "Cost"). A static mesh
-//! beyond both gets the positions-only build alone ([`PlainSet::Positions`]).
+//! beyond both gets the positions-only build alone ([`PlainSet::Positions`]), a skinned one the
+//! posed check of its repair ([`PlainSet::PosedCheck`]), which needs the reference poses too.
 
 use super::step::LodTuning;
 use crate::compress::skeleton_extent;
@@ -46,6 +47,10 @@ pub(super) enum PlainSet {
     /// The positions-only build alone, measured at rest: a static mesh beyond the bound, where
     /// that build is one simplification and one measurement (docs/lod.md, "Cost").
     Positions,
+    /// None, but the step's repair also checked in the reference poses, without a grid per pose
+    /// (`measure::hinted_posed_far`): a skinned mesh beyond the bound (docs/lod.md, "A posed
+    /// check without a grid per pose").
+    PosedCheck,
     /// All six, the step from LOD 0 and the posed repair build.
     All,
 }
@@ -56,7 +61,7 @@ pub(super) enum PlainSet {
 /// the scene's clip share (`motion.joint_keys / CLIP_KEYS_PER_PLAIN_WORK`): where the file's clips
 /// are large, the plain builds are a small part of the convert (docs/lod.md, "Cost"). A static
 /// mesh beyond both gets the positions-only build (its comparison needs no pose); a skinned one
-/// none. A bound of 0: none on any mesh.
+/// the posed check. A bound of 0: none of these on any mesh.
 pub(super) fn plain_builds_of(
     meshes: &[Mesh],
     skeleton: Option<&Skeleton>,
@@ -80,10 +85,10 @@ pub(super) fn plain_builds_of(
                 return PlainSet::All;
             }
             let posed = work != plain_work_posed(&m.geometry, None, 0);
-            if tuning.plain_work_bound == 0 || posed {
-                PlainSet::Off
-            } else {
-                PlainSet::Positions
+            match (tuning.plain_work_bound == 0, posed) {
+                (true, _) => PlainSet::Off,
+                (false, true) => PlainSet::PosedCheck,
+                (false, false) => PlainSet::Positions,
             }
         })
         .collect()
@@ -120,10 +125,10 @@ pub fn scene_motion(clips: &[SceneClip], skeleton: Option<&Skeleton>) -> SceneMo
 }
 
 /// [`SceneMotion`] of `clips` for LODs of `meshes` with `tuning`: the reference poses are made
-/// only when some skinned mesh gets the plain builds, which are all that compare under them
-/// (picking them samples each clip 64 times: 0.5 and 0.8 ms on ninja's and Fox's clips, 2.3-3.0
-/// ms on a Half-Life model's first 16 sequences, against 0.2-0.8 ms for poses at fixed times;
-/// docs/lod.md, session 32).
+/// only when some skinned mesh gets the plain builds or the posed check, all that compare under
+/// them (picking them samples each clip 64 times: 0.5 and 0.8 ms on ninja's and Fox's clips,
+/// 2.3-3.0 ms on a Half-Life model's first 16 sequences, against 0.2-0.8 ms for poses at fixed
+/// times; docs/lod.md, session 32).
 /// The same plain builds and the same LODs as with [`scene_motion`].
 pub fn scene_motion_for(
     clips: &[SceneClip],
@@ -139,7 +144,7 @@ pub fn scene_motion_for(
     let used = plain_builds_of(meshes, skeleton, tuning, &motion)
         .iter()
         .zip(meshes)
-        .any(|(p, m)| *p == PlainSet::All && m.geometry.is_skinned());
+        .any(|(p, m)| matches!(p, PlainSet::All | PlainSet::PosedCheck) && m.geometry.is_skinned());
     if let (true, Some(s)) = (used, skeleton) {
         motion.poses = reference_poses(clips, s);
     }

@@ -80,19 +80,26 @@ fn vertex_flags_lock_borders_open_hard_edges_and_protect_seams() {
     assert_eq!(vertex_flags(&lod, &submesh_of(&lod), true, false), expected);
 }
 
+/// The corners of the unit square in z = 0 and two points inside it (its middle, and one nearer
+/// the left edge): a flat build of the square's two triangles passes through all six at rest.
+fn unit_square_with_two_inside() -> Vec<Vec3> {
+    [
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (1.0, 1.0),
+        (0.0, 1.0),
+        (0.5, 0.5),
+        (0.25, 0.5),
+    ]
+    .map(|(x, y)| Vec3::new(x, y, 0.0))
+    .to_vec()
+}
+
 /// The posed repair build's locks: LOD 0's vertices at least half as far from the build as the
 /// farthest, in that pose, given by their rest positions, farthest first.
 #[test]
 fn posed_far_vertices_are_the_far_ones_in_that_pose_by_their_rest_positions() {
-    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let rest = vec![
-        p(0.0, 0.0, 0.0),
-        p(1.0, 0.0, 0.0),
-        p(1.0, 1.0, 0.0),
-        p(0.0, 1.0, 0.0),
-        p(0.5, 0.5, 0.0),
-        p(0.25, 0.5, 0.0),
-    ];
+    let rest = unit_square_with_two_inside();
     // In the pose, vertex 4 rises by 1 and vertex 5 by 0.6; the build (the quad without them)
     // stays flat.
     let mut posed = rest.clone();
@@ -105,6 +112,42 @@ fn posed_far_vertices_are_the_far_ones_in_that_pose_by_their_rest_positions() {
     // Only what is more than half the farthest distance away.
     let far = measure::posed_far_vertices(&rest, &used, (&posed, &posed), &build, 1.5);
     assert_eq!(far, vec![rest[4]]);
+}
+
+/// The posed check (`measure::hinted_posed_far`) measures each of LOD 0's points against the
+/// build's triangle its rest search ended on, under each pose, and gives the farthest pose's
+/// distance and its far points by their rest positions.
+#[test]
+fn the_posed_check_finds_the_farthest_pose_and_its_far_points() {
+    let rest = unit_square_with_two_inside();
+    let lod0 = [0u32, 1, 4, 1, 2, 4, 2, 3, 5, 3, 0, 5, 0, 4, 5, 2, 5, 4];
+    // The build: the quad without vertices 4 and 5; flat, so at rest both lie on it.
+    let build = [0u32, 1, 2, 0, 2, 3];
+    let base_points = measure::distinct(&crate::surface::used_vertices(&rest, &lod0));
+    let vertices = measure::distinct_used(&rest, &lod0);
+    assert_eq!(vertices, [0, 1, 4, 2, 3, 5]);
+    let grid = crate::surface::TriangleGrid::new(&rest, &lod0);
+    let m = measure::measure(&rest, &build, &base_points, &grid);
+    assert!(m.distance() < 1e-6, "{}", m.distance());
+    // Pose A: vertex 4 rises by 1 and vertex 5 by 0.6; pose B: vertex 4 by 0.9, vertex 5 by 2.
+    let mut a = rest.clone();
+    (a[4].z, a[5].z) = (1.0, 0.6);
+    let mut b = rest.clone();
+    (b[4].z, b[5].z) = (0.9, 2.0);
+    let poses = [a, b];
+    let (top, far) =
+        measure::hinted_posed_far(&m, (&vertices, &base_points), &build, (&poses, &poses));
+    assert!((top - 2.0).abs() < 1e-6, "{top}");
+    // In pose B only vertex 5 is more than half as far as the farthest.
+    assert_eq!(far, vec![rest[5]]);
+    let (top, far) = measure::hinted_posed_far(
+        &m,
+        (&vertices, &base_points),
+        &build,
+        (&poses[..1], &poses[..1]),
+    );
+    assert!((top - 1.0).abs() < 1e-6, "{top}");
+    assert_eq!(far, vec![rest[4], rest[5]]);
 }
 
 /// A static mesh of `tris` triangles (a fan; only the count matters to the work).
@@ -125,10 +168,11 @@ fn static_mesh(tris: usize) -> Mesh {
 
 /// Meshes within the bound always have the plain builds; beyond it, in mesh order, while their
 /// work fits in the clips' share (one unit per two joint-keys); a static mesh beyond both has the
-/// positions-only build, a skinned one none; with the bound 0, no mesh has any.
+/// positions-only build, a skinned one the posed check of its repair; with the bound 0, no mesh
+/// has any.
 #[test]
 fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
-    use PlainSet::{All, Off, Positions};
+    use PlainSet::{All, Off, PosedCheck, Positions};
     // Static: 8 units per triangle. 1,250 triangles: 10,000 units, the bound itself.
     let meshes: Vec<Mesh> = [1_250, 1_500, 2_000, 1_251, 100]
         .into_iter()
@@ -171,8 +215,8 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
         [All; 5]
     );
     // Skinned to a skeleton (the two test poses: 10 units per triangle): 1,000 triangles are
-    // within the bound, 1,001 are not and get no plain build; without the skeleton they are
-    // static (8,008 units, within it).
+    // within the bound, 1,001 are not and get no plain build but the posed check; without the
+    // skeleton they are static (8,008 units, within it); with the bound 0, neither.
     let skinned = |tris: usize| {
         let mut m = static_mesh(tris);
         let n = m.geometry.positions.len();
@@ -192,7 +236,11 @@ fn plain_builds_beyond_the_bound_share_the_clips_budget_in_mesh_order() {
     let no_clips = SceneMotion::default();
     assert_eq!(
         plain_builds_of(&meshes, Some(&skeleton), &tuning, &no_clips),
-        [All, Off]
+        [All, PosedCheck]
+    );
+    assert_eq!(
+        plain_builds_of(&meshes, Some(&skeleton), &none, &no_clips),
+        [Off, Off]
     );
     assert_eq!(
         plain_builds_of(&meshes, None, &tuning, &no_clips),

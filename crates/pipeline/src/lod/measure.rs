@@ -277,10 +277,9 @@ pub(super) fn distinct_used(positions: &[Vec3], indices: &[u32]) -> Vec<u32> {
 /// (docs/lod.md, "A posed check without a grid per pose"): each of LOD 0's points (`vertices`,
 /// the vertex behind each of `m`'s points) measured, in each pose, against the one triangle of
 /// the build (`indices`) its rest search ended on (`m`'s hints), both skinned: `base_posed` is LOD
-/// 0's vertices under the poses, `source_posed` the build's source's. No point is nearer to
-/// that triangle than to the build's surface, so each distance is an upper bound of the point's
-/// distance in the pose, and exact for a point the build kept (0). Returns the largest over
-/// the poses and the rest positions of that pose's points more than half as far, farthest first
+/// 0's vertices under the poses, `source_posed` the build's source's. A point is never nearer
+/// one triangle than the whole surface, so each distance is an upper bound of the point's
+/// distance from the build in the pose. Returns the largest over the poses and the rest positions of that pose's points more than half as far, farthest first
 /// (ties in order), at most [`REPAIR_VERTICES`].
 pub(super) fn hinted_posed_far(
     m: &Measured,

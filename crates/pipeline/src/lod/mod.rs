@@ -260,20 +260,18 @@ fn build_lods_timed(
     // at the vertices it removed (on the corpus and fixtures the centroids and edge midpoints of
     // LOD 0 add at most 4%; the margin covers it).
     let base_grid = TriangleGrid::new(&mesh.geometry.positions, &mesh.geometry.indices);
-    let base_points = distinct(&used_vertices(
-        &mesh.geometry.positions,
-        &mesh.geometry.indices,
-    ));
-    // The posed check of the step's repair (`PlainSet::PosedCheck`): LOD 0's vertex behind each
-    // of `base_points`, and LOD 0 under the reference poses.
-    let (check_vertices, check_base) = if plain == PlainSet::PosedCheck && !reference.is_empty() {
-        let g = &mesh.geometry;
-        (
-            measure::distinct_used(&g.positions, &g.indices),
-            step::reference_positions(g, skeleton, reference),
-        )
+    // Each with the vertex behind it, which the posed check skins.
+    let base_vertices = measure::distinct_used(&mesh.geometry.positions, &mesh.geometry.indices);
+    let base_points: Vec<Vec3> = base_vertices
+        .iter()
+        .map(|&v| mesh.geometry.positions[v as usize])
+        .collect();
+    // The posed check of the step's build (`PlainSet::PosedCheck`): LOD 0 under the reference
+    // poses.
+    let check_base = if plain == PlainSet::PosedCheck {
+        step::reference_positions(&mesh.geometry, skeleton, reference)
     } else {
-        Default::default()
+        Vec::new()
     };
     let checked = !check_base.is_empty();
     // The plain builds (`Step::plain`) of every level, when they run, start from LOD 0 in the
@@ -441,7 +439,7 @@ fn build_lods_timed(
         let posed_check = |m: &Measured, indices: &[u32]| {
             measure::hinted_posed_far(
                 m,
-                (&check_vertices, &base_points),
+                (&base_vertices, &base_points),
                 indices,
                 (&check_base, &check_source),
             )

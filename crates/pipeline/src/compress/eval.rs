@@ -177,7 +177,7 @@ pub(super) struct Eval<'a> {
 /// One key's quantized values, as [`Eval::key_into`] works them out: per component its stored
 /// integer and decoded value, per rotation its decoded value, per joint its model rotation.
 #[derive(Default)]
-struct KeyRow {
+pub(super) struct KeyRow {
     q: Vec<(u32, f32)>,
     raw: Vec<Quat>,
     rot: Vec<Quat>,
@@ -585,7 +585,7 @@ impl<'a> Eval<'a> {
 
     /// Quantizes key `k`: every component of every joint, parents first (`row`: scratch space).
     /// (A change of one component is worked out by [`super::trial::Trial`].)
-    fn requantize_key(&mut self, k: usize, row: &mut KeyRow) {
+    pub(super) fn requantize_key(&mut self, k: usize, row: &mut KeyRow) {
         self.key_into(k, row);
         self.store_key(k, row);
     }
@@ -738,7 +738,7 @@ impl<'a> Eval<'a> {
     /// Every joint's local and model transform at source time `i` into `local` and `model` (one
     /// per joint, parents first), the anchors' model transforms rebased on the source's origins at
     /// `i` ([`Rig::rebase`]).
-    fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
+    pub(super) fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
         let origins = self.origins_at(i);
         // The anchors are in joint order: each compared with in turn (most rigs have one).
         let mut anchors = self.ctx.rig.anchors.iter().enumerate();

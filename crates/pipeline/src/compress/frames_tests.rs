@@ -55,6 +55,7 @@ fn search_on(
         true,
         options,
         true,
+        false,
     )
 }
 

@@ -46,6 +46,11 @@
 //!    the first set of kept keys and from the budget the one before reached for the next), then
 //!    one bit at a time off each component of each segment
 //!    for as long as the measured error (kept up to date incrementally) stays within the limits.
+//!    On the whole source (not on its frames or thinned copy, whose result is checked at times
+//!    the search does not measure), each segment first climbs a ladder of its own: its budget
+//!    raised by 2^(1/4) at a time, its components' a-priori widths lowered together while the
+//!    segment holds within the limits (the clip's ladder stops at its hardest segment), so that
+//!    the first round's tries start nearer their result (docs/performance.md, session 34).
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
 //!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the
@@ -123,6 +128,8 @@
 
 #[cfg(test)]
 mod anchor_tests;
+#[cfg(test)]
+mod climb_tests;
 mod eval;
 #[cfg(test)]
 mod frames_tests;

@@ -376,12 +376,7 @@ impl Layout {
             let seg_ext = self.ranges[c][1] * (f32::from(e.extent) / 255.0);
             let mut b = 0u8;
             while b < MAX_BITS {
-                let err = if b == 0 {
-                    seg_ext * 0.5
-                } else {
-                    seg_ext / ((1u32 << b) - 1) as f32 * 0.5
-                };
-                if err <= allowed {
+                if half_step(seg_ext, b) <= allowed {
                     break;
                 }
                 b += 1;
@@ -389,6 +384,14 @@ impl Layout {
             bits[i] = b;
         }
         bits
+    }
+
+    /// The a-priori error bound of [`Layout::first_bits`] for component `c` of segment `s` at
+    /// `bits`, in model units: its gain times half a quantization step.
+    pub(super) fn first_bound(&self, s: usize, c: usize, bits: u8) -> f32 {
+        let e = self.sub[s * self.comps.len() + c];
+        let seg_ext = self.ranges[c][1] * (f32::from(e.extent) / 255.0);
+        half_step(seg_ext, bits) * self.comps[c].gain.max(1e-12)
     }
 
     /// The size of the clip record [`Layout::encode`] gives with these bit widths (whatever the
@@ -535,6 +538,16 @@ pub(super) fn locate(like: &Clip, times: &[f32], t: f32) -> (usize, usize, f32) 
         return (c, c, 0.0);
     }
     (c, c + 1, (t - times[c]) / (times[c + 1] - times[c]))
+}
+
+/// Half a quantization step of a range `extent` wide at `bits` (half the range at 0 bits, where
+/// its middle is stored).
+fn half_step(extent: f32, bits: u8) -> f32 {
+    if bits == 0 {
+        extent * 0.5
+    } else {
+        extent / ((1u32 << bits) - 1) as f32 * 0.5
+    }
 }
 
 #[cfg(test)]

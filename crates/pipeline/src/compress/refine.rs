@@ -33,7 +33,7 @@ type Refined = (
 /// state that holds what they read ([`Eval::load_segment`]), side by side, and what they wrote is
 /// copied back. Every try sees what it would see one at a time, so the result is the same at any
 /// thread count.
-pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
+pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32], climbs: bool) {
     eval.fill_local();
     let nc = eval.layout.comps.len();
     let segs = eval.layout.seg_count;
@@ -58,35 +58,101 @@ pub(super) fn descend(eval: &mut Eval, par: bool, thresholds: &[f32]) {
         worst,
     };
     if par && threads > 1 && segs > 2 {
-        side_by_side(state, threads, thresholds);
+        side_by_side(state, threads, thresholds, climbs);
         return;
     }
     let mut trial = Trial::default();
-    each_round(thresholds, |parity, limit| {
+    each_round(thresholds, climbs, |parity, round| {
         let mut changed = false;
         for s in (parity..segs).step_by(2) {
-            changed |= state.refine_in_place(&mut trial, s, limit);
+            changed |= state.refine_in_place(&mut trial, s, round);
         }
         changed
     });
 }
 
-/// The rounds of [`descend`]: `phase(parity, limit)` refines the segments of one parity at the
-/// round's threshold (true when it kept a try); the graded rounds, then rounds at 1 until one
-/// keeps nothing.
-fn each_round(thresholds: &[f32], mut phase: impl FnMut(usize, f32) -> bool) {
+/// One round of [`descend`] as a phase sees it: its threshold, and whether each segment first
+/// climbs ([`climb`]: the first round).
+#[derive(Clone, Copy)]
+struct Round {
+    limit: f32,
+    climb: bool,
+}
+
+/// The rounds of [`descend`]: `phase(parity, round)` refines the segments of one parity in the
+/// round (true when it kept a try); the graded rounds, then rounds at 1 until one keeps nothing.
+fn each_round(thresholds: &[f32], climbs: bool, mut phase: impl FnMut(usize, Round) -> bool) {
     let mut round = 0;
     loop {
         let limit = thresholds.get(round).copied().unwrap_or(1.0);
+        let climb = round == 0 && climbs;
         round += 1;
         let mut changed = false;
         for parity in 0..2 {
-            changed |= phase(parity, limit);
+            changed |= phase(parity, Round { limit, climb });
         }
         if !changed && round >= thresholds.len() {
             break;
         }
     }
+}
+
+/// Rungs a segment's climb goes up at most ([`climb`]): 2^(40/4), a thousand times its budget.
+const CLIMB_RUNGS: usize = 40;
+
+/// Segment `s`'s own ladder: its budget (the largest a-priori bound its widths give,
+/// [`super::quantize::Layout::first_bound`]) raised a rung (2^(1/4)) at a time, every component
+/// whose bound one bit lower is within the raised budget lowered, all of them at once
+/// ([`Eval::lower_segment`]); up to the first rung that does not hold at `limit`. The whole clip's
+/// ladder stops where its hardest segment does; most segments hold a few rungs more, which their
+/// tries one component at a time would otherwise find one kept try (a subtree requantized and
+/// measured) at a time. Returns, per joint, the largest ratio of error to limit at the segment's
+/// times and its position, after the last rung kept; `None` when none was.
+pub(super) fn climb(
+    eval: &mut Eval,
+    s: usize,
+    worst: &[(f32, usize)],
+) -> Option<Vec<(f32, usize)>> {
+    // The times of the segment's largest errors, largest first, measured first.
+    let mut probes: Vec<(f32, usize)> = worst.iter().copied().filter(|w| w.0 > 0.0).collect();
+    probes.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut probes: Vec<usize> = probes.into_iter().map(|w| w.1).collect();
+    dedup_keep_order(&mut probes);
+    probes.truncate(MAX_PROBES);
+    let layout = eval.layout;
+    let nc = layout.comps.len();
+    let mut current = eval.bits[s * nc..(s + 1) * nc].to_vec();
+    let step = std::f32::consts::SQRT_2.sqrt();
+    let mut budget = (0..nc)
+        .map(|c| layout.first_bound(s, c, current[c]))
+        .fold(0.0f32, f32::max);
+    let mut kept = None;
+    for _ in 0..CLIMB_RUNGS {
+        if current.iter().all(|&b| b == 0) {
+            break;
+        }
+        budget *= step;
+        let bits: Vec<u8> = (0..nc)
+            .map(|c| {
+                let mut b = current[c];
+                while b > 0 && layout.first_bound(s, c, b - 1) <= budget {
+                    b -= 1;
+                }
+                b
+            })
+            .collect();
+        if bits == current {
+            continue;
+        }
+        match eval.lower_segment(s, &bits, 1.0, &probes) {
+            Some(worst) => {
+                kept = Some(worst);
+                current = bits;
+            }
+            None => break,
+        }
+    }
+    kept
 }
 
 /// The state a refinement works on, and its bookkeeping per segment ([`descend`]).
@@ -99,7 +165,7 @@ struct State<'e, 'a> {
 
 impl State<'_, '_> {
     /// One round's tries on segment `s` of the state itself ([`refine_segment`]).
-    fn refine_in_place(&mut self, trial: &mut Trial, s: usize, limit: f32) -> bool {
+    fn refine_in_place(&mut self, trial: &mut Trial, s: usize, round: Round) -> bool {
         let (nc, nj) = (self.eval.layout.comps.len(), self.eval.nj);
         let own = s * nc..(s + 1) * nc;
         refine_segment(
@@ -107,7 +173,7 @@ impl State<'_, '_> {
             None,
             trial,
             s,
-            limit,
+            round,
             (
                 &mut self.blocked[own.clone()],
                 &mut self.probes[own],
@@ -118,7 +184,13 @@ impl State<'_, '_> {
 
     /// One round's tries on segment `s` on `copy` (a copy of the state: [`Eval::empty_copy`]),
     /// reading the state: what they wrote and the segment's bookkeeping.
-    fn refine_on_copy(&self, copy: &mut Eval, trial: &mut Trial, s: usize, limit: f32) -> Refined {
+    fn refine_on_copy(
+        &self,
+        copy: &mut Eval,
+        trial: &mut Trial,
+        s: usize,
+        round: Round,
+    ) -> Refined {
         let (nc, nj) = (self.eval.layout.comps.len(), self.eval.nj);
         let own = s * nc..(s + 1) * nc;
         let mut b = self.blocked[own.clone()].to_vec();
@@ -129,7 +201,7 @@ impl State<'_, '_> {
             Some(self.eval),
             trial,
             s,
-            limit,
+            round,
             (&mut b, &mut p, &mut w),
         );
         (s, kept.then(|| copy.segment_state(s)), b, p, w)
@@ -175,7 +247,7 @@ struct Phases {
     /// The phase's number (high 32 bits) and the next segment to claim (low 32 bits).
     cursor: AtomicU64,
     /// The current phase: its number, segments and threshold.
-    plan: RwLock<(u64, Vec<usize>, f32)>,
+    plan: RwLock<(u64, Vec<usize>, Round)>,
     /// Per segment of the current phase: what refining it gave, and how many are done.
     results: Mutex<Vec<Option<Refined>>>,
     done: AtomicUsize,
@@ -213,7 +285,7 @@ impl Phases {
         &self,
         number: u64,
         segments: &[usize],
-        limit: f32,
+        round: Round,
         state: &RwLock<State>,
         slot: &Mutex<(Eval, Trial)>,
     ) {
@@ -223,7 +295,7 @@ impl Phases {
                 let state = state.read().unwrap_or_else(PoisonError::into_inner);
                 let mut slot = slot.lock().unwrap_or_else(PoisonError::into_inner);
                 let (copy, trial) = &mut *slot;
-                state.refine_on_copy(copy, trial, segments[i], limit)
+                state.refine_on_copy(copy, trial, segments[i], round)
             };
             let took = u64::try_from(started.elapsed().as_nanos()).unwrap_or(u64::MAX);
             self.cost[segments[i]].store(took, Ordering::Relaxed);
@@ -249,7 +321,7 @@ impl Drop for FailOnUnwind<'_> {
 /// phase waits for a thread to be woken), what they wrote copied back in segment order. The
 /// calling thread never waits for a helper to start: it claims segments too, and does them all
 /// if no helper comes, so a pool busy elsewhere only makes it slower.
-fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
+fn side_by_side(state: State, threads: usize, thresholds: &[f32], climbs: bool) {
     let segs = state.eval.layout.seg_count;
     let slots: Vec<Mutex<(Eval, Trial)>> = (0..threads)
         .map(|_| Mutex::new((state.eval.empty_copy(), Trial::default())))
@@ -257,7 +329,14 @@ fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
     let state = RwLock::new(state);
     let phases = Phases {
         cursor: AtomicU64::new(0),
-        plan: RwLock::new((0, Vec::new(), 1.0)),
+        plan: RwLock::new((
+            0,
+            Vec::new(),
+            Round {
+                limit: 1.0,
+                climb: false,
+            },
+        )),
         results: Mutex::new(Vec::new()),
         done: AtomicUsize::new(0),
         over: AtomicBool::new(false),
@@ -275,13 +354,13 @@ fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
             if phases.over.load(Ordering::Acquire) {
                 return;
             }
-            let (number, segments, limit) = phases
+            let (number, segments, round) = phases
                 .plan
                 .read()
                 .unwrap_or_else(PoisonError::into_inner)
                 .clone();
             seen = number;
-            phases.work(number, &segments, limit, &state, slot);
+            phases.work(number, &segments, round, &state, slot);
         }
     };
     rayon::scope(|scope| {
@@ -291,7 +370,7 @@ fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
         }
         let _over = OverOnDrop(&phases.over);
         let mut number = 0u64;
-        each_round(thresholds, |parity, limit| {
+        each_round(thresholds, climbs, |parity, round| {
             let mut segments: Vec<usize> = (parity..segs).step_by(2).collect();
             segments.sort_by_key(|&s| std::cmp::Reverse(phases.cost[s].load(Ordering::Relaxed)));
             let count = segments.len();
@@ -302,9 +381,9 @@ fn side_by_side(state: State, threads: usize, thresholds: &[f32]) {
                 .unwrap_or_else(PoisonError::into_inner) = (0..count).map(|_| None).collect();
             phases.done.store(0, Ordering::Release);
             *phases.plan.write().unwrap_or_else(PoisonError::into_inner) =
-                (number, segments.clone(), limit);
+                (number, segments.clone(), round);
             phases.cursor.store(number << 32, Ordering::Release);
-            phases.work(number, &segments, limit, &state, &slots[0]);
+            phases.work(number, &segments, round, &state, &slots[0]);
             wait_until(|| {
                 phases.done.load(Ordering::Acquire) == count
                     || phases.failed.load(Ordering::Acquire)
@@ -352,15 +431,30 @@ fn refine_segment(
     from: Option<&Eval>,
     trial: &mut Trial,
     s: usize,
-    limit: f32,
+    Round {
+        limit,
+        climb: climbs,
+    }: Round,
     (blocked, probes, worst): (&mut [bool], &mut [usize], &mut [(f32, usize)]),
 ) -> bool {
     let nc = eval.layout.comps.len();
     let mut kept = false;
+    // The copy holds the segment's neighbourhood (the tries read it instead of `from`).
+    let mut loaded = from.is_none();
+    if climbs {
+        if let Some(state) = from {
+            eval.load_segment(state, s);
+            loaded = true;
+        }
+        if let Some(w) = climb(eval, s, worst) {
+            kept = true;
+            worst.copy_from_slice(&w);
+        }
+    }
     for (c, (blocked, probe)) in blocked.iter_mut().zip(probes.iter_mut()).enumerate() {
         let i = s * nc + c;
         let current: &Eval = match from {
-            Some(state) if !kept => state,
+            Some(state) if !loaded => state,
             _ => eval,
         };
         if current.bits[i] == 0 || *blocked {
@@ -387,8 +481,9 @@ fn refine_segment(
         let probes: [usize; MAX_PROBES] = std::array::from_fn(|k| first[k].1);
         trial.run(current, s, c, current.bits[i] - 1, limit, &probes[..n]);
         if trial.worst <= limit {
-            if let Some(state) = from.filter(|_| !kept) {
+            if let Some(state) = from.filter(|_| !loaded) {
                 eval.load_segment(state, s);
+                loaded = true;
             }
             trial.commit(eval);
             kept = true;
@@ -422,4 +517,16 @@ fn segment_worst(eval: &Eval) -> Vec<(f32, usize)> {
         }
     }
     worst
+}
+
+/// `v` without its repeated entries, the first of each kept in place.
+fn dedup_keep_order(v: &mut Vec<usize>) {
+    let mut seen = Vec::with_capacity(v.len());
+    v.retain(|x| {
+        let new = !seen.contains(x);
+        if new {
+            seen.push(*x);
+        }
+        new
+    });
 }

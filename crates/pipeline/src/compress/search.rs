@@ -268,6 +268,7 @@ pub(super) fn compress_work(
     bind_allowed: bool,
     options: &CompressOptions,
     compensate: bool,
+    climbs: bool,
 ) -> Option<Found> {
     if work.times.is_empty() {
         return None;
@@ -397,7 +398,7 @@ pub(super) fn compress_work(
         } else {
             &THRESHOLDS
         };
-        descend(&mut e, alone, thresholds);
+        descend(&mut e, alone, thresholds, climbs);
         let holds = |c: Clip| {
             let errors = errors_against(rig, src, origins, &c, times);
             within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
@@ -574,7 +575,11 @@ fn search(
     bind_allowed: bool,
     options: &CompressOptions,
 ) -> Option<Found> {
-    let on = |clip: &Clip, sampled: Option<&Sampled>, tolerance: f32, options: &CompressOptions| {
+    let on = |clip: &Clip,
+              sampled: Option<&Sampled>,
+              tolerance: f32,
+              options: &CompressOptions,
+              climbs: bool| {
         [true, false].into_iter().find_map(|compensate| {
             compress_work(
                 &mut Work::from_plain(clip),
@@ -585,6 +590,7 @@ fn search(
                 bind_allowed,
                 options,
                 compensate,
+                climbs,
             )
         })
     };
@@ -608,7 +614,7 @@ fn search(
             origins,
             tolerance,
             || thin().is_none(),
-            |clip, sampled, tolerance| on(clip, Some(sampled), tolerance, options),
+            |clip, sampled, tolerance| on(clip, Some(sampled), tolerance, options, false),
         )
     };
     found.extend(at_frames(options));
@@ -633,18 +639,18 @@ fn search(
         };
         let reduced = tolerance * (1.0 - THINNING);
         let thin_sampled = Sampled::new(rig, thin, thin.times());
-        found.extend(on(thin, Some(&thin_sampled), reduced, options).and_then(holds));
+        found.extend(on(thin, Some(&thin_sampled), reduced, options, false).and_then(holds));
         if options.effort == Effort::Max {
             // The default's result on the thinned source too, so that `Max` is never larger.
             let default = CompressOptions {
                 effort: Effort::Default,
                 ..options.clone()
             };
-            found.extend(on(thin, Some(&thin_sampled), reduced, &default).and_then(holds));
+            found.extend(on(thin, Some(&thin_sampled), reduced, &default, false).and_then(holds));
         }
     }
     if found.is_empty() || options.effort == Effort::Max {
-        found.extend(on(source, Some(whole), tolerance, options));
+        found.extend(on(source, Some(whole), tolerance, options, true));
     }
     // The smallest (the first of equals, in the order tried).
     let mut best: Option<Found> = None;

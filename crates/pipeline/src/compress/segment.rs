@@ -2,7 +2,8 @@
 //! of an [`Eval`] ([`Eval::empty_copy`], [`Eval::load_segment`]) and what they write back
 //! ([`Eval::segment_state`], [`Eval::store_segment`]).
 
-use super::eval::Eval;
+use super::eval::{point_distance, Eval, KeyRow};
+use super::metric::exceeds;
 use super::quantize::Quant;
 use sinew_core::glam::{Affine3A, Quat};
 
@@ -116,6 +117,98 @@ impl<'a> Eval<'a> {
             key_rot: self.key_rot[here.start * nj..here.end * nj].to_vec(),
             local_aff,
             model,
+        }
+    }
+
+    /// Sets segment `s`'s bit widths to `bits` (each at most the state's) at once, when that keeps
+    /// every joint within `limit` of its limit (a ratio) at every source time that reads the
+    /// segment: then returns, per joint, the largest ratio over those times and its position among
+    /// them; else leaves the state as it was and returns `None`. The state holds the segment's
+    /// neighbourhood (a whole state, or a copy with [`Eval::load_segment`] done). It requantizes
+    /// the segment's keys and computes every joint at its times: about what one try of the root's
+    /// rotation costs, where lowering each component in turn requantizes and measures a subtree
+    /// per component.
+    pub(super) fn lower_segment(
+        &mut self,
+        s: usize,
+        bits: &[u8],
+        limit: f32,
+        probes: &[usize],
+    ) -> Option<Vec<(f32, usize)>> {
+        let nc = self.layout.comps.len();
+        let nj = self.nj;
+        let saved = self.segment_state(s);
+        for (c, &b) in bits.iter().enumerate().take(nc) {
+            let i = s * nc + c;
+            if b != self.bits[i] {
+                self.bits[i] = b;
+                self.params[i] = self.layout.params(s, c, b);
+            }
+        }
+        let keys = self.layout.seg_keys(s);
+        let mut key_done = vec![false; keys.len()];
+        let mut row = KeyRow::default();
+        let times = std::mem::take(&mut self.seg_times[s]);
+        let mut worst = vec![(0.0f32, 0usize); nj];
+        let mut seen = vec![false; times.len()];
+        let mut holds = true;
+        // The probes first (where the segment's errors were largest), each with only the keys it
+        // reads requantized (a key's quantization reads no other key), then the rest in order.
+        let order = probes
+            .iter()
+            .copied()
+            .filter(|&p| p < times.len())
+            .chain(0..times.len());
+        for pos in order {
+            if seen[pos] {
+                continue;
+            }
+            seen[pos] = true;
+            let i = times[pos];
+            let (k0, k1, a) = self.at[i];
+            for k in [Some(k0), (a != 0.0).then_some(k1)].into_iter().flatten() {
+                if let Some(kk) = k.checked_sub(keys.start).filter(|&kk| kk < keys.len()) {
+                    if !key_done[kk] {
+                        key_done[kk] = true;
+                        self.requantize_key(k, &mut row);
+                    }
+                }
+            }
+            let rows = (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
+            let mut local = std::mem::take(&mut self.local_aff);
+            let mut model = std::mem::take(&mut self.model);
+            self.pose_into(i, &mut local[rows.clone()], &mut model[rows.clone()]);
+            let src = &self.ctx.src_flat[i * nj..(i + 1) * nj];
+            for (j, m) in model[rows].iter().enumerate() {
+                let r =
+                    point_distance(&src[j], self.ctx.rig.point_scale[j], m) / self.ctx.limits[j];
+                if exceeds(r, limit) {
+                    holds = false;
+                    break;
+                }
+                if r > worst[j].0 {
+                    worst[j] = (r, pos);
+                }
+            }
+            self.local_aff = local;
+            self.model = model;
+            if !holds {
+                break;
+            }
+        }
+        if holds {
+            for (kk, done) in key_done.iter().enumerate() {
+                if !done {
+                    self.requantize_key(keys.start + kk, &mut row);
+                }
+            }
+        }
+        self.seg_times[s] = times;
+        if holds {
+            Some(worst)
+        } else {
+            self.store_segment(&saved);
+            None
         }
     }
 

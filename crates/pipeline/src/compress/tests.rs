@@ -16,7 +16,7 @@ use sinew_core::{Clip, Skeleton, Transform};
 use sinew_core::{Curve, JointDesc, TrackCurves};
 
 /// The first widths of `layout` from the peers' tolerance, checked (with no probes).
-fn first_widths(ctx: &Ctx, layout: &Layout, work: &Work, compensate: bool) -> Vec<u8> {
+pub(super) fn first_widths(ctx: &Ctx, layout: &Layout, work: &Work, compensate: bool) -> Vec<u8> {
     first_state(
         ctx,
         layout,
@@ -106,7 +106,7 @@ fn compressed(clip: &Clip, skeleton: &Skeleton, tolerance: f32, compensate: bool
         effort: Effort::Default,
     };
     compress_work(
-        &mut work, &source, None, &rig, tolerance, true, &options, compensate,
+        &mut work, &source, None, &rig, tolerance, true, &options, compensate, false,
     )
     .unwrap()
     .1
@@ -170,7 +170,7 @@ fn incremental_state_matches_a_fresh_evaluation() {
         let layout = Layout::new(&work, &rig, 16, compensate);
         let bits = first_widths(&ctx, &layout, &work, compensate);
         let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
-        descend(&mut e, true, &THRESHOLDS);
+        descend(&mut e, true, &THRESHOLDS, false);
         assert!(
             e.bits.iter().zip(&bits).any(|(a, b)| a < b),
             "nothing descended"
@@ -484,22 +484,37 @@ fn the_side_by_side_refinement_makes_the_decisions_of_one_try_at_a_time() {
         let mut want = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
         descend_one_at_a_time(&mut want);
         assert!(want.bits.iter().zip(&bits).filter(|(a, b)| a < b).count() > 20);
+        let model_bits = |e: &Eval| -> Vec<u32> {
+            e.model
+                .iter()
+                .flat_map(|m| m.to_cols_array())
+                .map(f32::to_bits)
+                .collect()
+        };
         for par in [false, true] {
             let mut got = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
-            descend(&mut got, par, &THRESHOLDS);
+            descend(&mut got, par, &THRESHOLDS, false);
             assert_eq!(
                 got.bits, want.bits,
                 "compensate {compensate}, parallel {par}"
             );
             assert_eq!(got.qi, want.qi);
-            let model_bits = |e: &Eval| -> Vec<u32> {
-                e.model
-                    .iter()
-                    .flat_map(|m| m.to_cols_array())
-                    .map(f32::to_bits)
-                    .collect()
-            };
             assert_eq!(model_bits(&got), model_bits(&want));
+        }
+        // With the segments' climb first (another path: the comparison is of the climb), the
+        // same on one thread (in place) and on two and three (on copies, side by side).
+        let climbed = |threads: usize| {
+            on_threads(threads, || {
+                let mut e = Eval::new(&ctx, &layout, &work, bits.clone(), compensate);
+                descend(&mut e, threads > 1, &THRESHOLDS, true);
+                assert!(e.within());
+                (e.bits.clone(), e.qi.clone(), model_bits(&e))
+            })
+        };
+        let one = climbed(1);
+        assert_ne!(one.0, want.bits, "compensate {compensate}");
+        for threads in [2, 3] {
+            assert_eq!(climbed(threads), one, "{threads} threads");
         }
     }
 }

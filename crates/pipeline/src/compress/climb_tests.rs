@@ -84,14 +84,29 @@ fn a_rung_that_does_not_hold_leaves_the_state_as_it_was() {
         let zeros = vec![0u8; nc];
         // With probes (a time in the segment measured first) and without.
         for probes in [&[][..], &[3][..]] {
-            assert!(e.lower_segment(6, &zeros, 1.0, probes).is_none());
+            let (j, pos) = e.lower_segment(6, &zeros, 1.0, (probes, &[])).unwrap_err();
+            assert!(j < e.nj && pos < e.seg_times[6].len());
             assert_eq!(written(e), before, "probes {probes:?}");
         }
+        // Only the last joint's components lowered: it alone moves (a leaf of the chain), so a
+        // failure is found there.
+        let mut leaf_only = e.bits[6 * nc..7 * nc].to_vec();
+        let leaf = e.nj - 1;
+        for (c, b) in leaf_only.iter_mut().enumerate() {
+            if e.joint[e.layout.comps[c].track] == leaf {
+                *b = 0;
+            }
+        }
+        let (j, _) = e.lower_segment(6, &leaf_only, 1.0, (&[], &[])).unwrap_err();
+        assert_eq!(j, leaf);
+        assert_eq!(written(e), before);
         // And a rung that holds changes the state (so that the comparison can tell).
         let mut one_down = e.bits[6 * nc..7 * nc].to_vec();
         let c = one_down.iter().position(|&b| b > 1).unwrap();
         one_down[c] -= 1;
-        assert!(e.lower_segment(6, &one_down, f32::INFINITY, &[]).is_some());
+        assert!(e
+            .lower_segment(6, &one_down, f32::INFINITY, (&[], &[]))
+            .is_ok());
         assert_ne!(written(e), before);
     });
 }

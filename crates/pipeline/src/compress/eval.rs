@@ -1,7 +1,7 @@
 //! Incremental error evaluation of a quantisation while its bit widths change.
 
 use super::metric::{exceeds, joint_limits, rebase_on, Rig};
-use super::quantize::{locate, raw_rotation, Layout, Quant};
+use super::quantize::{locate, raw_rotation, Kind, Layout, Quant};
 use super::reduce::{WChan, Work};
 use rayon::prelude::*;
 use sinew_core::clip::{nlerp, normalize_rotation};
@@ -552,7 +552,7 @@ impl<'a> Eval<'a> {
         parts.into_par_iter().for_each(|mut p| {
             let mut row = KeyRow::default();
             for (at, k) in (p.k0..).take(p.rot.len() / nj).enumerate() {
-                state.key_into(k, &mut row);
+                state.key_into(k, &mut row, &[]);
                 for (c, &(q, x)) in row.q.iter().enumerate() {
                     p.qi[c][at] = q;
                     p.dec[c][at] = x;
@@ -585,8 +585,15 @@ impl<'a> Eval<'a> {
 
     /// Quantizes key `k`: every component of every joint, parents first (`row`: scratch space).
     /// (A change of one component is worked out by [`super::trial::Trial`].)
-    pub(super) fn requantize_key(&mut self, k: usize, row: &mut KeyRow) {
-        self.key_into(k, row);
+    fn requantize_key(&mut self, k: usize, row: &mut KeyRow) {
+        self.key_into(k, row, &[]);
+        self.store_key(k, row);
+    }
+
+    /// [`Eval::requantize_key`] for the joints `moved` marks alone (the others' values, which
+    /// read nothing that changed, are the state's; a joint is marked with its subtree).
+    pub(super) fn requantize_moved(&mut self, k: usize, row: &mut KeyRow, moved: &[bool]) {
+        self.key_into(k, row, moved);
         self.store_key(k, row);
     }
 
@@ -605,14 +612,31 @@ impl<'a> Eval<'a> {
     }
 
     /// Key `k` quantized into `row`: every component's stored integer and decoded value, every
-    /// rotation as decoded, every joint's model rotation (parents first).
-    fn key_into(&self, k: usize, row: &mut KeyRow) {
+    /// rotation as decoded, every joint's model rotation (parents first). With `moved` (one flag
+    /// per joint; empty: every joint), the joints not marked take the state's values.
+    fn key_into(&self, k: usize, row: &mut KeyRow, moved: &[bool]) {
         let s = k / self.layout.seg_len.max(1);
         let nc = self.layout.comps.len();
+        let at = k - self.first_key;
         row.q.resize(nc, (0, 0.0));
         row.raw.resize(self.layout.index.len(), Quat::IDENTITY);
         row.rot.resize(self.nj, Quat::IDENTITY);
         for d in 0..self.nj {
+            if moved.get(d).is_some_and(|m| !m) {
+                if let Some(tr) = self.track_of[d] {
+                    for c0 in self.first[tr].into_iter().flatten() {
+                        for c in c0..c0 + 3 {
+                            row.q[c] = (self.qi[c][at], self.dec[c][at]);
+                        }
+                    }
+                    if let Some(c0) = self.first[tr][Kind::R as usize] {
+                        let ri = self.layout.comps[c0].rot;
+                        row.raw[ri] = self.raw[ri][at];
+                    }
+                }
+                row.rot[d] = self.key_rot[at * self.nj + d];
+                continue;
+            }
             let pr = self.parent(d).map_or(Quat::IDENTITY, |p| row.rot[p]);
             let mut rot = self.base[d].rotation;
             if let Some(tr) = self.track_of[d] {
@@ -738,18 +762,37 @@ impl<'a> Eval<'a> {
     /// Every joint's local and model transform at source time `i` into `local` and `model` (one
     /// per joint, parents first), the anchors' model transforms rebased on the source's origins at
     /// `i` ([`Rig::rebase`]).
-    pub(super) fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
+    fn pose_into(&self, i: usize, local: &mut [Affine3A], model: &mut [Affine3A]) {
+        self.pose_moved_into(i, local, model, &[]);
+    }
+
+    /// [`Eval::pose_into`] for the joints `moved` marks (one flag per joint, a joint marked with
+    /// its subtree; empty: every joint); the others' entries of `local` and `model` are left as
+    /// they are (the state's, which read nothing that changed).
+    pub(super) fn pose_moved_into(
+        &self,
+        i: usize,
+        local: &mut [Affine3A],
+        model: &mut [Affine3A],
+        moved: &[bool],
+    ) {
         let origins = self.origins_at(i);
         // The anchors are in joint order: each compared with in turn (most rigs have one).
         let mut anchors = self.ctx.rig.anchors.iter().enumerate();
         let mut next = anchors.next();
         for d in 0..self.nj {
+            let anchor = next.filter(|&(_, &a)| a == d);
+            if anchor.is_some() {
+                next = anchors.next();
+            }
+            if moved.get(d).is_some_and(|m| !m) {
+                continue;
+            }
             local[d] = self.local_pose(d, i).to_affine();
             let pm = self.parent(d).map_or(Affine3A::IDENTITY, |p| model[p]);
             model[d] = pm * local[d];
-            if let Some((slot, _)) = next.filter(|&(_, &a)| a == d) {
+            if let Some((slot, _)) = anchor {
                 rebase_on(&mut model[d], origins, slot);
-                next = anchors.next();
             }
         }
     }

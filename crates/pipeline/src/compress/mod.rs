@@ -49,8 +49,10 @@
 //!    On the whole source (not on its frames or thinned copy, whose result is checked at times
 //!    the search does not measure), each segment first climbs a ladder of its own: its budget
 //!    raised by 2^(1/4) at a time, its components' a-priori widths lowered together while the
-//!    segment holds within the limits (the clip's ladder stops at its hardest segment), so that
-//!    the first round's tries start nearer their result (docs/performance.md, session 34).
+//!    segment holds within the limits; where a rung does not, the components of the joint where
+//!    it failed and of its ancestors stay, and the rung is tried again without them (the clip's
+//!    ladder stops at its hardest segment and joint; the rest climb further), so that the first
+//!    round's tries start nearer their result (docs/performance.md, session 34).
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
 //!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the

@@ -103,17 +103,22 @@ const CLIMB_RUNGS: usize = 40;
 /// Segment `s`'s own ladder: its budget (the largest a-priori bound its widths give,
 /// [`super::quantize::Layout::first_bound`]) raised a rung (2^(1/4)) at a time, every component
 /// whose bound one bit lower is within the raised budget lowered, all of them at once
-/// ([`Eval::lower_segment`]); up to the first rung that does not hold at `limit`. The whole clip's
-/// ladder stops where its hardest segment does; most segments hold a few rungs more, which their
-/// tries one component at a time would otherwise find one kept try (a subtree requantized and
-/// measured) at a time. Returns, per joint, the largest ratio of error to limit at the segment's
-/// times and its position, after the last rung kept; `None` when none was.
+/// ([`Eval::lower_segment`]), while the segment holds within the limits (the clip's ladder's
+/// verdict, whatever the round's threshold). Where a rung does not hold, the components that move
+/// the joint where it failed (its own and its ancestors') stay where they are from then on, and
+/// the rung is tried again without them; the climb ends when every component that could be
+/// lowered stays. The whole clip's ladder stops where its hardest segment and joint do; most
+/// segments and chains hold rungs more, which their tries one component at a time would otherwise
+/// find one kept try (a subtree requantized and measured) at a time. Returns, per joint, the
+/// largest ratio of error to limit at the segment's times and its position, after the last rung
+/// kept; `None` when none was.
 pub(super) fn climb(
     eval: &mut Eval,
     s: usize,
     worst: &[(f32, usize)],
 ) -> Option<Vec<(f32, usize)>> {
-    // The times of the segment's largest errors, largest first, measured first.
+    // The times of the segment's largest errors, largest first, measured first; then where a
+    // rung failed.
     let mut probes: Vec<(f32, usize)> = worst.iter().copied().filter(|w| w.0 > 0.0).collect();
     probes.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut probes: Vec<usize> = probes.into_iter().map(|w| w.1).collect();
@@ -122,20 +127,26 @@ pub(super) fn climb(
     let layout = eval.layout;
     let nc = layout.comps.len();
     let mut current = eval.bits[s * nc..(s + 1) * nc].to_vec();
+    let mut stays: Vec<bool> = current.iter().map(|&b| b == 0).collect();
+    // Each component's joint.
+    let joint_of: Vec<usize> = (0..nc).map(|c| eval.joint[layout.comps[c].track]).collect();
     let step = std::f32::consts::SQRT_2.sqrt();
     let mut budget = (0..nc)
         .map(|c| layout.first_bound(s, c, current[c]))
         .fold(0.0f32, f32::max);
     let mut kept = None;
-    for _ in 0..CLIMB_RUNGS {
-        if current.iter().all(|&b| b == 0) {
-            break;
+    let mut rungs = 0;
+    let mut again = false;
+    while rungs < CLIMB_RUNGS && stays.iter().any(|&x| !x) {
+        if !again {
+            budget *= step;
+            rungs += 1;
         }
-        budget *= step;
+        again = false;
         let bits: Vec<u8> = (0..nc)
             .map(|c| {
                 let mut b = current[c];
-                while b > 0 && layout.first_bound(s, c, b - 1) <= budget {
+                while !stays[c] && b > 0 && layout.first_bound(s, c, b - 1) <= budget {
                     b -= 1;
                 }
                 b
@@ -144,12 +155,25 @@ pub(super) fn climb(
         if bits == current {
             continue;
         }
-        match eval.lower_segment(s, &bits, 1.0, &probes) {
-            Some(worst) => {
+        let known = kept.as_deref().unwrap_or(worst);
+        match eval.lower_segment(s, &bits, 1.0, (&probes, known)) {
+            Ok(worst) => {
                 kept = Some(worst);
                 current = bits;
+                for (c, &b) in current.iter().enumerate() {
+                    stays[c] |= b == 0;
+                }
             }
-            None => break,
+            Err((j, pos)) => {
+                for c in 0..nc {
+                    stays[c] |= eval.subtree[joint_of[c]].contains(&j);
+                }
+                if !probes.contains(&pos) {
+                    probes.insert(0, pos);
+                    probes.truncate(MAX_PROBES);
+                }
+                again = true;
+            }
         }
     }
     kept

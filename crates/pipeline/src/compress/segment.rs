@@ -123,35 +123,52 @@ impl<'a> Eval<'a> {
     /// Sets segment `s`'s bit widths to `bits` (each at most the state's) at once, when that keeps
     /// every joint within `limit` of its limit (a ratio) at every source time that reads the
     /// segment: then returns, per joint, the largest ratio over those times and its position among
-    /// them; else leaves the state as it was and returns `None`. The state holds the segment's
-    /// neighbourhood (a whole state, or a copy with [`Eval::load_segment`] done). It requantizes
-    /// the segment's keys and computes every joint at its times: about what one try of the root's
-    /// rotation costs, where lowering each component in turn requantizes and measures a subtree
-    /// per component.
+    /// them (`known`'s entry for a joint nothing moves); else leaves the state as it was and
+    /// returns the joint and the time's position where it found that it does not. The state holds
+    /// the segment's neighbourhood (a whole state, or a copy with [`Eval::load_segment`] done).
+    /// Only the joints that move (the changed components' joints and their subtrees) are
+    /// requantized and measured, the `probes` (positions among the segment's times) first: the
+    /// times where the segment's errors were largest, or where an earlier change failed.
     pub(super) fn lower_segment(
         &mut self,
         s: usize,
         bits: &[u8],
         limit: f32,
-        probes: &[usize],
-    ) -> Option<Vec<(f32, usize)>> {
+        (probes, known): (&[usize], &[(f32, usize)]),
+    ) -> Result<Vec<(f32, usize)>, (usize, usize)> {
         let nc = self.layout.comps.len();
         let nj = self.nj;
         let saved = self.segment_state(s);
+        // The joints that move: each changed component's joint with its subtree.
+        let mut moved = vec![false; nj];
         for (c, &b) in bits.iter().enumerate().take(nc) {
             let i = s * nc + c;
             if b != self.bits[i] {
                 self.bits[i] = b;
                 self.params[i] = self.layout.params(s, c, b);
+                for &d in &self.subtree[self.joint[self.layout.comps[c].track]] {
+                    moved[d] = true;
+                }
             }
         }
         let keys = self.layout.seg_keys(s);
         let mut key_done = vec![false; keys.len()];
         let mut row = KeyRow::default();
         let times = std::mem::take(&mut self.seg_times[s]);
-        let mut worst = vec![(0.0f32, 0usize); nj];
+        // The joints that do not move keep their errors (`known`).
+        let mut worst: Vec<(f32, usize)> = (0..nj)
+            .map(|j| {
+                let w = known.get(j).copied().unwrap_or((0.0, 0));
+                if moved[j] {
+                    (0.0, 0)
+                } else {
+                    w
+                }
+            })
+            .collect();
         let mut seen = vec![false; times.len()];
-        let mut holds = true;
+        // Where it does not hold: the joint and the time's position.
+        let mut over = None;
         // The probes first (where the segment's errors were largest), each with only the keys it
         // reads requantized (a key's quantization reads no other key), then the rest in order.
         let order = probes
@@ -170,20 +187,28 @@ impl<'a> Eval<'a> {
                 if let Some(kk) = k.checked_sub(keys.start).filter(|&kk| kk < keys.len()) {
                     if !key_done[kk] {
                         key_done[kk] = true;
-                        self.requantize_key(k, &mut row);
+                        self.requantize_moved(k, &mut row, &moved);
                     }
                 }
             }
             let rows = (i - self.first_time) * nj..(i - self.first_time + 1) * nj;
             let mut local = std::mem::take(&mut self.local_aff);
             let mut model = std::mem::take(&mut self.model);
-            self.pose_into(i, &mut local[rows.clone()], &mut model[rows.clone()]);
+            self.pose_moved_into(
+                i,
+                &mut local[rows.clone()],
+                &mut model[rows.clone()],
+                &moved,
+            );
             let src = &self.ctx.src_flat[i * nj..(i + 1) * nj];
             for (j, m) in model[rows].iter().enumerate() {
+                if !moved[j] {
+                    continue;
+                }
                 let r =
                     point_distance(&src[j], self.ctx.rig.point_scale[j], m) / self.ctx.limits[j];
                 if exceeds(r, limit) {
-                    holds = false;
+                    over = Some((j, pos));
                     break;
                 }
                 if r > worst[j].0 {
@@ -192,23 +217,24 @@ impl<'a> Eval<'a> {
             }
             self.local_aff = local;
             self.model = model;
-            if !holds {
+            if over.is_some() {
                 break;
             }
         }
-        if holds {
+        if over.is_none() {
             for (kk, done) in key_done.iter().enumerate() {
                 if !done {
-                    self.requantize_key(keys.start + kk, &mut row);
+                    self.requantize_moved(keys.start + kk, &mut row, &moved);
                 }
             }
         }
         self.seg_times[s] = times;
-        if holds {
-            Some(worst)
-        } else {
-            self.store_segment(&saved);
-            None
+        match over {
+            None => Ok(worst),
+            Some(at) => {
+                self.store_segment(&saved);
+                Err(at)
+            }
         }
     }
 

@@ -2,7 +2,7 @@
 """Per-clip encoder time against ACL's compressor, alternating rounds (issue 29, goal 1;
 docs/performance.md, sessions 16 to 18).
 
-perclip.py ROUNDS OUT.md FILE...   (corpus-relative paths)
+perclip.py ROUNDS OUT.md FILE...   (corpus-relative paths, or absolute ones)
 
 sinew: crates/pipeline's compress_time example at 0.001 @ 0.1, default effort, in a pool of 2 threads
 (the machine's cores) and of 1, one run per fresh process, the encoder timed on the pool thread that
@@ -39,7 +39,7 @@ def acl_run(path):
     return g("compression_time") * 1000, int(g("compressed_size")), g("max_error")
 plan = []
 for f in sys.argv[3:]:
-    src = f"{C}/{f}"
+    src = f if os.path.isabs(f) else f"{C}/{f}"
     info = json.loads(subprocess.run([SINEW, "inspect", src, "--json"], capture_output=True, text=True).stdout)
     glb = src if f.endswith((".glb", ".gltf")) else os.path.join(tmp, os.path.basename(f) + ".glb")
     if glb != src:

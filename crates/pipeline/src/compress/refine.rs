@@ -23,7 +23,9 @@ type Refined = (
 /// rise over the first rounds (`thresholds`: [`super::search::THRESHOLDS`], or none for
 /// `Effort::Fast`) so that the cheapest reductions are taken first, then stay at 1 until no
 /// reduction is kept. A reduction that fails at threshold 1 is not tried again (errors only grow
-/// as other widths shrink).
+/// as other widths shrink). With `climbs`, each segment first climbs a ladder of its own in the
+/// first round, before its components' tries ([`climb`]; it reads and writes what a try on the
+/// segment does).
 ///
 /// Within a round the even segments go first, then the odd ones; on each segment the components
 /// go in order, each kept try committed before the next is worked out. A try reads and writes only
@@ -449,7 +451,8 @@ impl Drop for OverOnDrop<'_> {
 /// segment's entries); true when one was kept. With `from`, `eval` is a copy of that state
 /// ([`Eval::empty_copy`]): the tries read `from` until one is kept, which first loads the
 /// segment's neighbourhood into the copy ([`Eval::load_segment`]), and the rest read and write the
-/// copy; a segment where nothing is kept copies nothing.
+/// copy; a segment where nothing is kept copies nothing back. With `climb` the segment first
+/// climbs ([`climb`], on the copy loaded first).
 fn refine_segment(
     eval: &mut Eval,
     from: Option<&Eval>,

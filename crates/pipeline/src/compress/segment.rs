@@ -2,7 +2,7 @@
 //! of an [`Eval`] ([`Eval::empty_copy`], [`Eval::load_segment`]) and what they write back
 //! ([`Eval::segment_state`], [`Eval::store_segment`]).
 
-use super::eval::{point_distance, Eval, KeyRow};
+use super::eval::{Eval, KeyRow};
 use super::metric::exceeds;
 use super::quantize::Quant;
 use sinew_core::glam::{Affine3A, Quat};
@@ -157,13 +157,9 @@ impl<'a> Eval<'a> {
         let times = std::mem::take(&mut self.seg_times[s]);
         // The joints that do not move keep their errors (`known`).
         let mut worst: Vec<(f32, usize)> = (0..nj)
-            .map(|j| {
-                let w = known.get(j).copied().unwrap_or((0.0, 0));
-                if moved[j] {
-                    (0.0, 0)
-                } else {
-                    w
-                }
+            .map(|j| match known.get(j) {
+                Some(&w) if !moved[j] => w,
+                _ => (0.0, 0),
             })
             .collect();
         let mut seen = vec![false; times.len()];
@@ -200,13 +196,11 @@ impl<'a> Eval<'a> {
                 &mut model[rows.clone()],
                 &moved,
             );
-            let src = &self.ctx.src_flat[i * nj..(i + 1) * nj];
             for (j, m) in model[rows].iter().enumerate() {
                 if !moved[j] {
                     continue;
                 }
-                let r =
-                    point_distance(&src[j], self.ctx.rig.point_scale[j], m) / self.ctx.limits[j];
+                let r = self.error_at(i, j, m) / self.ctx.limits[j];
                 if exceeds(r, limit) {
                     over = Some((j, pos));
                     break;

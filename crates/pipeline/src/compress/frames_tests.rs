@@ -59,8 +59,8 @@ fn search_on(
     )
 }
 
-/// [`frames_first`] on `clip` at 0.001 with the search `search` runs ([`search_on`]), shown each
-/// round's frames, tolerance and round number first (`look`); with the number of times each round
+/// [`frames_first`] on `clip` at 0.001 with the search `search` runs ([`search_on`]), shown the
+/// frames, tolerance and search number first (`look`); with the number of times each search
 /// searched.
 fn searched_on_frames(
     clip: &Clip,
@@ -70,20 +70,12 @@ fn searched_on_frames(
 ) -> (Option<Found>, Vec<usize>) {
     let (rig, src, origins) = rig_points(clip, skeleton);
     let seen = std::cell::RefCell::new(Vec::new());
-    let found = frames_first(
-        clip,
-        &rig,
-        &src,
-        &origins,
-        0.001,
-        || true,
-        |frames, sampled, tol| {
-            let round = seen.borrow().len();
-            look(frames, tol, round);
-            seen.borrow_mut().push(frames.times().len());
-            search_on(frames, Some(sampled), &rig, tol, options)
-        },
-    );
+    let found = frames_first(clip, &rig, &src, &origins, 0.001, |frames, sampled, tol| {
+        let round = seen.borrow().len();
+        look(frames, tol, round);
+        seen.borrow_mut().push(frames.times().len());
+        search_on(frames, Some(sampled), &rig, tol, options)
+    });
     (found, seen.into_inner())
 }
 
@@ -161,7 +153,7 @@ fn a_clip_searched_on_its_frames_holds_at_every_time_and_is_smaller() {
     // It came from the search on the frames, which holds in its first round here.
     let (on_frames, rounds) = searched_on_frames(&clip, &skeleton, &options, |frames, tol, _| {
         assert_eq!(frames.times(), &frame_times[..]);
-        assert!((tol - 0.001 * FRAME_ROUNDS[0]).abs() < 1e-9);
+        assert!((tol - 0.001 * FRAME_SHARE).abs() < 1e-9);
     });
     let on_frames = on_frames.unwrap();
     assert_eq!(rounds.len(), 1);
@@ -247,7 +239,8 @@ fn frames_that_interpolation_reproduces_are_left_out_of_the_search() {
     let (on_frames, seen) = searched_on_frames(&clip, &skeleton, &options, |frames, tol, round| {
         assert!(frames.times().iter().all(|t| frame_times.contains(t)));
         assert!(frames.times().contains(&clip.times()[160]));
-        let share = FRAME_ROUNDS[round] * (1.0 - THINNING);
+        assert_eq!(round, 0);
+        let share = FRAME_SHARE * (1.0 - THINNING);
         assert!((tol - 0.001 * share).abs() < 1e-9, "{tol}");
     });
     let on_frames = on_frames.unwrap();
@@ -267,16 +260,14 @@ fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
     let (_, c, _) = compressed_within(&clip, &skeleton);
     // The frames alone, nlerped, are past the limits between them: not searched at all.
     let (rig, src, origins) = rig_points(&clip, &skeleton);
-    let none = frames_first(
-        &clip,
-        &rig,
-        &src,
-        &origins,
-        0.001,
-        || true,
-        |_, _, _| panic!("searched frames that cannot hold"),
-    );
+    let none = frames_first(&clip, &rig, &src, &origins, 0.001, |_, _, _| {
+        panic!("searched frames that cannot hold")
+    });
     assert!(none.is_none());
+    // Nor with the frames as candidate keys.
+    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let options = CompressOptions::peers();
+    assert!(frame_keys((&clip, &whole), &rig, (0.001, true), &options).is_none());
     // It needs keys between the frames, which the search on the frames alone cannot keep.
     let frame_times: Vec<f32> = frame_indices(9, 15)
         .into_iter()
@@ -312,27 +303,15 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
     assert!(worst <= 0.001, "error {worst}");
     // Searched on the frames alone, it does not hold at some added time; its source thins (the
     // added times are within 1% of the tolerance of linear interpolation between others), so the
-    // thinned source is searched instead of a second round on the frames (144 bytes; 140 after
-    // three rounds on the frames, session 30).
+    // thinned source is searched next (144 bytes; 140 after three rounds on the frames, session
+    // 30), not the frames as keys.
     let (rig, src, origins) = rig_points(clip, skeleton);
     let rounds = std::cell::Cell::new(0);
-    let asked = std::cell::Cell::new(false);
-    let on_frames = frames_first(
-        clip,
-        &rig,
-        &src,
-        &origins,
-        0.001,
-        || {
-            asked.set(true);
-            false
-        },
-        |frames, sampled, tol| {
-            rounds.set(rounds.get() + 1);
-            search_on(frames, Some(sampled), &rig, tol, &options)
-        },
-    );
-    assert!(on_frames.is_none() && asked.get());
+    let on_frames = frames_first(clip, &rig, &src, &origins, 0.001, |frames, sampled, tol| {
+        rounds.set(rounds.get() + 1);
+        search_on(frames, Some(sampled), &rig, tol, &options)
+    });
+    assert!(on_frames.is_none());
     assert_eq!(rounds.get(), 1);
     let poses = rig.poses(clip, clip.times());
     let (_, thin) = thinned(clip, &rig, &src, &origins, Some(&poses), 0.001).unwrap();
@@ -341,40 +320,47 @@ fn simple_skin_is_searched_on_its_file_keys_and_holds_between_them() {
 }
 
 #[test]
-fn a_first_round_that_does_not_hold_asks_whether_to_go_on() {
+fn a_search_on_the_frames_that_does_not_hold_is_not_kept_and_the_frames_as_keys_hold() {
     let skeleton = chain(6, 0.3);
     let clip = densified_swing(&skeleton, 31, 7).to_plain();
     let (rig, src, origins) = rig_points(&clip, &skeleton);
     let options = CompressOptions::peers();
-    for go_on in [false, true] {
-        let rounds = std::cell::Cell::new(0);
-        let asked = std::cell::Cell::new(0);
-        let found = frames_first(
-            &clip,
-            &rig,
-            &src,
-            &origins,
-            0.001,
-            || {
-                asked.set(asked.get() + 1);
-                go_on
-            },
-            // The first round searched at 30 times the tolerance: it cannot hold.
-            |frames, sampled, tol| {
-                rounds.set(rounds.get() + 1);
-                let tol = if rounds.get() == 1 { tol * 30.0 } else { tol };
-                search_on(frames, Some(sampled), &rig, tol, &options)
-            },
-        );
-        assert_eq!(asked.get(), 1);
-        if go_on {
-            assert_eq!(rounds.get(), 2);
-            assert!(found.unwrap().2.iter().all(|&e| e <= 0.001));
-        } else {
-            assert_eq!(rounds.get(), 1);
-            assert!(found.is_none());
-        }
-    }
+    // The search on the frames at 30 times the tolerance: measured at every time, it does not
+    // hold, and nothing is returned (one search, no rounds after it).
+    let searches = std::cell::Cell::new(0);
+    let found = frames_first(
+        &clip,
+        &rig,
+        &src,
+        &origins,
+        0.001,
+        |frames, sampled, tol| {
+            searches.set(searches.get() + 1);
+            search_on(frames, Some(sampled), &rig, tol * 30.0, &options)
+        },
+    );
+    assert!(found.is_none());
+    assert_eq!(searches.get(), 1);
+    // The frames as the only candidate keys, every time measured: every key kept is a frame,
+    // and the errors it reports are those at every time, each within its joint's limit (and
+    // `measure`, computed apart from the search, agrees that the tolerance holds).
+    let frame_times: Vec<f32> = frame_indices(31, 7)
+        .into_iter()
+        .map(|i| clip.times()[i])
+        .collect();
+    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let (size, c, errors) = frame_keys((&clip, &whole), &rig, (0.001, true), &options).unwrap();
+    assert!(c.times().iter().all(|t| frame_times.contains(t)));
+    assert_eq!(errors.len(), clip.times().len() * skeleton.len());
+    let limits = joint_limits(&src, skeleton.len(), 0.001);
+    assert!(within_limits(&errors, &limits));
+    let worst = measure(&clip, &c, Some(&skeleton), 0.1)
+        .into_iter()
+        .fold(0.0f32, f32::max);
+    assert!(worst <= 0.001, "{worst}");
+    // Smaller than the search on every time, which keeps keys between the frames.
+    let every = whole_search(&clip, &rig, &options);
+    assert!(size < every.0, "{size} vs {}", every.0);
 }
 
 #[test]

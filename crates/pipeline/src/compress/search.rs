@@ -2,7 +2,7 @@
 
 use super::eval::{add_probe, Ctx, Eval, Probes, Sampled, PROBES};
 use super::metric::{
-    clip_extent, errors_against, exceeds, holds_against, joint_limits, measure, skeleton_extent,
+    clip_extent, errors_against, holds_against, joint_limits, measure, skeleton_extent,
     within_limits, Rig,
 };
 use super::options::{
@@ -557,16 +557,19 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 pub(super) type Found = (usize, Clip, Vec<f32>);
 
 /// The search on the source's frames first ([`frames_first`]; its result, when one holds, for
-/// `Fast` and `Default`), then on a source of thinned times, then (when it found nothing that
+/// `Fast` and `Default`), then, where it did not hold and the source does not thin, the search
+/// with the frames as the only candidate keys, measured at every time ([`frame_keys`]), then on
+/// a source of thinned times, then (when it found nothing that
 /// holds at every source time, or for `Max`) on the whole source; the smallest result, with its
 /// errors at every source time. `whole`: the source sampled at its times.
 ///
-/// When the frames' first round does not hold and the source thins, the thinned source is
-/// searched next instead of more rounds: the rounds find the times between frames that matter by
-/// failing at them, a search each; a source that thins has them chosen by its own interpolation
-/// already. Where it does not (captures at 0.001 @ 0.1, whose every time moves), the rounds
-/// are what makes the frames pay (docs/performance.md, session 31: zombie.ms3d's export at the
-/// default tolerance 6,657 -> 6,386 bytes in 0.6x the time, SimpleSkin.gltf 140 -> 144 bytes).
+/// When the search on the frames does not hold and the source thins, the thinned source is
+/// searched next (docs/performance.md, session 31: zombie.ms3d's export at the default tolerance
+/// 6,657 -> 6,386 bytes in 0.6x the time). Where it does not thin (captures at 0.001 @ 0.1, whose
+/// every time moves), [`frame_keys`] keeps the frames' advantage (no key between frames) and
+/// measures every time, so that its result holds: until session 35, more rounds on the frames and
+/// the times where each failed, which on some captures failed four times over and fell back to the
+/// whole source at twice the bytes (docs/performance.md, session 35).
 fn search(
     source: &Clip,
     whole: &Sampled,
@@ -580,19 +583,9 @@ fn search(
               tolerance: f32,
               options: &CompressOptions,
               climbs: bool| {
-        [true, false].into_iter().find_map(|compensate| {
-            compress_work(
-                &mut Work::from_plain(clip),
-                clip,
-                sampled,
-                rig,
-                tolerance,
-                bind_allowed,
-                options,
-                compensate,
-                climbs,
-            )
-        })
+        let work = Work::from_plain(clip);
+        let at = (clip, sampled, rig, tolerance);
+        compensated_first(&work, at, bind_allowed, options, climbs)
     };
     let mut found: Vec<Found> = Vec::new();
     let times = source.times();
@@ -613,7 +606,6 @@ fn search(
             src,
             origins,
             tolerance,
-            || thin().is_none(),
             |clip, sampled, tolerance| on(clip, Some(sampled), tolerance, options, false),
         )
     };
@@ -628,6 +620,19 @@ fn search(
             ..options.clone()
         };
         found.extend(at_frames(&default));
+    }
+    // Where the frames did not hold and the source does not thin: the frames as candidate keys,
+    // every time measured (for `Max`, one more candidate).
+    if options.effort == Effort::Max || thin().is_none() {
+        found.extend(frame_keys(
+            (source, whole),
+            rig,
+            (tolerance, bind_allowed),
+            options,
+        ));
+        if !found.is_empty() && options.effort != Effort::Max {
+            return found.pop();
+        }
     }
     if let Some((_, thin)) = thin() {
         let limits = joint_limits(src, rig.skeleton.len(), tolerance);
@@ -662,12 +667,9 @@ fn search(
     best
 }
 
-/// The fractions of the tolerance the search on the source's frames gets, round after round
-/// ([`frames_first`]): a round that does not hold at every source time is followed by one that
-/// also measures the times where it did not, at the next fraction. Measured on 44 clips of motion
-/// capture exported to glTF (docs/performance.md, session 30): one fraction (0.99) left 9 of them
-/// failing after three rounds, this ladder 3 of them after four.
-pub(super) const FRAME_ROUNDS: [f32; 4] = [0.99, 0.95, 0.9, 0.8];
+/// The fraction of the tolerance the search on the source's frames gets ([`frames_first`]): the
+/// rest is margin for the times between frames, which it does not measure.
+pub(super) const FRAME_SHARE: f32 = 0.99;
 
 /// The indices of `source`'s *frames*: its key times on the grid of its sample rate (from its
 /// first time), the first and last time always among them; `None` when they are more than half
@@ -706,25 +708,23 @@ pub(super) fn frames(source: &Clip) -> Option<Vec<usize>> {
     (kept.len() * 2 <= times.len()).then_some(kept)
 }
 
-/// The search on the source's [`frames`] alone, kept only where its result holds at every source
-/// time: a round searches the frames (and the times earlier rounds found over their limits) at
-/// the next fraction of [`FRAME_ROUNDS`], and its result is measured at every time; the first that
-/// holds is returned. `None` at once when [`frames`] finds none to search, or when the frames
-/// themselves, interpolated as the runtime does, leave some joint's limit at a time between them
-/// (nothing keyed on the frames alone can then hold there); after a first round that does not
-/// hold when `more_rounds` (asked then, once) says no; and after the last round.
+/// The search on the source's [`frames`] alone at [`FRAME_SHARE`] of the tolerance, kept only where
+/// its result holds at every source time. `None` at once when [`frames`] finds none to search, or
+/// when the frames themselves, interpolated as the runtime does, leave some joint's limit at a
+/// time between them (nothing keyed on the frames alone can then hold there); `None` when the
+/// result does not hold ([`frame_keys`] or the thinned source is searched next).
 ///
 /// Why: a search on every imported time spends part of the tolerance on key reduction at the
 /// added times, where nlerp between frames parts from the file's slerp, and so keeps keys between
 /// frames and more bits; measured on motion captures exported to glTF, the result on the frames,
 /// checked at the added times, is 0.54-1.02x as large (14% smaller in all), in 0.17-0.5x the time
-/// where the first round holds and up to 2.65x where the rounds fail (docs/performance.md,
-/// session 30). The guarantee is the same: within the tolerance at every imported key time.
+/// (docs/performance.md, session 30). The guarantee is the same: within the tolerance at every
+/// imported key time.
 ///
 /// Frames that linear interpolation between the frames kept reproduces within [`THINNING`] x the
 /// tolerance are left out first, as [`thinned`] leaves out times (when that is at least a fifth of
-/// them), and every round's fraction is then of the rest of the tolerance: a file keyed on every
-/// step of a fine grid (sinew's own export of ninja.ms3d: 8,627 frames on a 1,600 Hz grid of 17,459
+/// them), and the fraction is then of the rest of the tolerance: a file keyed on every step of a
+/// fine grid (sinew's own export of ninja.ms3d: 8,627 frames on a 1,600 Hz grid of 17,459
 /// imported times, 3,998 after this) was searched on all of them, 2x the time of the thinned
 /// search before the frames (docs/performance.md, session 31).
 /// `search_at`: the search on a plain clip, sampled, at a tolerance.
@@ -734,27 +734,14 @@ pub(super) fn frames_first(
     src: &[Vec<[Vec3; 3]>],
     origins: &[Vec3],
     tolerance: f32,
-    more_rounds: impl FnOnce() -> bool,
     search_at: impl Fn(&Clip, &Sampled, f32) -> Option<Found>,
 ) -> Option<Found> {
-    let mut kept = frames(source)?;
+    let kept = frames(source)?;
     let times = source.times();
     let limits = joint_limits(src, rig.skeleton.len(), tolerance);
-    let over_limits = |errors: &[f32]| -> Vec<usize> {
-        errors
-            .chunks(limits.len().max(1))
-            .enumerate()
-            .filter(|(_, at)| at.iter().zip(&limits).any(|(&e, &l)| exceeds(e, l)))
-            .map(|(i, _)| i)
-            .collect()
-    };
-    let plain_at = |kept: &[usize]| {
-        let mut work = Work::from_plain(source);
-        work.keep(kept);
-        work.plain(source)
-    };
-    let mut more_rounds = Some(more_rounds);
-    let mut clip = plain_at(&kept)?;
+    let mut work = Work::from_plain(source);
+    work.keep(&kept);
+    let mut clip = work.plain(source)?;
     if !holds_against(rig, src, origins, &clip, times, &limits) {
         return None;
     }
@@ -771,33 +758,70 @@ pub(super) fn frames_first(
         Some(&sampled.poses),
         tolerance,
     );
-    if let Some((thin, thin_clip)) = thin_frames {
-        kept = thin.iter().map(|&i| kept[i]).collect();
+    if let Some((_, thin_clip)) = thin_frames {
         clip = thin_clip;
         sampled = Sampled::new(rig, &clip, clip.times());
         share = 1.0 - THINNING;
     }
-    for (round, fraction) in FRAME_ROUNDS.into_iter().enumerate() {
-        if round > 0 {
-            clip = plain_at(&kept)?;
-            sampled = Sampled::new(rig, &clip, clip.times());
-        }
-        let (size, c, _) = search_at(&clip, &sampled, tolerance * fraction * share)?;
-        let errors = errors_against(rig, src, origins, &c, times);
-        let over = over_limits(&errors);
-        if over.is_empty() {
-            return Some((size, c, errors));
-        }
-        if let Some(ask) = more_rounds.take() {
-            if !ask() {
-                return None;
-            }
-        }
-        kept.extend(over);
-        kept.sort_unstable();
-        kept.dedup();
+    let (size, c, _) = search_at(&clip, &sampled, tolerance * FRAME_SHARE * share)?;
+    let errors = errors_against(rig, src, origins, &c, times);
+    within_limits(&errors, &limits).then_some((size, c, errors))
+}
+
+/// The search with the source's [`frames`] as its only candidate keys, measured at every source
+/// time: its result holds wherever it is found, and keeps no key between frames (the file's own
+/// keys, where the search on every time spends tolerance on times the importer added). `None`
+/// without frames, or when the frames, interpolated as the runtime does, leave some joint's limit
+/// at a time between them (then nothing keyed on frames holds), or when nothing meets the limits.
+///
+/// Why: after the search on the frames alone does not hold (the times between frames it does not
+/// measure), searching it again with the times where it failed moves the failures to other times
+/// between frames (a key dropped or requantized changes the runtime's interpolation across a
+/// whole interval); on captures at 0.001 @ 0.1 the rounds of sessions 30-34 failed four times
+/// over on some and the whole source was searched, at 1.5-2.5x the bytes of this search, which
+/// costs about what the whole source's does (docs/performance.md, session 35).
+/// `whole`: the source sampled at its times.
+pub(super) fn frame_keys(
+    (source, whole): (&Clip, &Sampled),
+    rig: &Rig,
+    (tolerance, bind_allowed): (f32, bool),
+    options: &CompressOptions,
+) -> Option<Found> {
+    let kept = frames(source)?;
+    let times = source.times();
+    let (src, origins) = (&*whole.points, whole.origins.as_slice());
+    let limits = joint_limits(src, rig.skeleton.len(), tolerance);
+    let mut work = Work::from_plain(source);
+    work.keep(&kept);
+    if !holds_against(rig, src, origins, &work.plain(source)?, times, &limits) {
+        return None;
     }
-    None
+    let at = (source, Some(whole), rig, tolerance);
+    compensated_first(&work, at, bind_allowed, options, true)
+}
+
+/// [`compress_work`] on a copy of `work`, measured against `source` (`sampled` at its times when
+/// known) at `tolerance`: with chain compensation, or without it where that finds nothing.
+fn compensated_first(
+    work: &Work,
+    (source, sampled, rig, tolerance): (&Clip, Option<&Sampled>, &Rig, f32),
+    bind_allowed: bool,
+    options: &CompressOptions,
+    climbs: bool,
+) -> Option<Found> {
+    [true, false].into_iter().find_map(|compensate| {
+        compress_work(
+            &mut work.clone(),
+            source,
+            sampled,
+            rig,
+            tolerance,
+            bind_allowed,
+            options,
+            compensate,
+            climbs,
+        )
+    })
 }
 
 /// Fraction of the tolerance within which the thinned source of [`thinned`] follows the source

@@ -128,10 +128,37 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
     let clip = Clip::from_curves("offset", times[120], 30.0, false, false, tracks).unwrap();
     let found = frames(&clip.to_plain()).unwrap();
     assert_eq!(found, (0..31).map(|k| 4 * k).collect::<Vec<_>>());
-    // Frames that are more than half of the times are not searched first.
+    // Frames that are more than half of the times are not searched first; at most four fifths,
+    // they are the candidate keys of `frame_keys`.
     let half = densified_swing(&skeleton, 31, 1).to_plain();
     assert_eq!(half.times().len(), 61);
     assert_eq!(frames(&half), None);
+    assert_eq!(frames_within(&half, (4, 5)), Some(frame_indices(31, 1)));
+    assert_eq!(frames_within(&half, (1, 2)), None);
+    assert_eq!(frames_within(&plain, (4, 5)), None);
+}
+
+#[test]
+fn frames_as_keys_hold_where_they_are_more_than_half_of_the_times() {
+    let skeleton = chain(6, 0.3);
+    // 31 frames of 61 times: no search on the frames alone, but the frames as candidate keys.
+    let clip = densified_swing(&skeleton, 31, 1).to_plain();
+    let (rig, src, _) = rig_points(&clip, &skeleton);
+    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let options = CompressOptions::peers();
+    let (_, c, errors) = frame_keys((&clip, &whole), &rig, (0.001, true), &options).unwrap();
+    let frame_times: Vec<f32> = frame_indices(31, 1)
+        .into_iter()
+        .map(|i| clip.times()[i])
+        .collect();
+    assert!(c.times().iter().all(|t| frame_times.contains(t)));
+    let limits = joint_limits(&src, skeleton.len(), 0.001);
+    assert_eq!(errors.len(), 61 * skeleton.len());
+    assert!(within_limits(&errors, &limits));
+    // `compress_clip` ends there too (the source does not thin at this tolerance).
+    let (compressed, r) = compress_clip(&clip, Some(&skeleton), &options);
+    assert_eq!(compressed.times(), c.times());
+    assert!(r.max_error <= 0.001, "{}", r.max_error);
 }
 
 #[test]

@@ -69,10 +69,11 @@
 //! and its result is measured at every source time; if it does not hold and the source does not
 //! thin (below: then the thinned source is searched instead), steps 1 to 5 run with the frames
 //! as the only candidate keys and every source time measured, whose result holds wherever one is
-//! found (for `Max`, each is one of its candidates). Rounds on the frames and the times where the
-//! last one failed (sessions 30-34) moved the failures to other times between frames and, on
-//! some captures, failed four times over before the whole source was searched at twice the bytes
-//! (docs/performance.md, session 35). A search on every imported time spends part of the
+//! found (for `Max`, each is one of its candidates); so too where the frames are more than half
+//! of the times but at most four fifths (no search on the frames alone then). Rounds on the
+//! frames and the times where the last one failed (sessions 30-34) moved the failures to other
+//! times between frames and, on some captures, failed four times over before the whole source
+//! was searched at twice the bytes (docs/performance.md, session 35). A search on every imported time spends part of the
 //! tolerance on key reduction at the added times, where the runtime's nlerp between frames parts
 //! from the file's slerp, and keeps keys between frames and more bits; on motion captures exported
 //! to glTF the result on the frames, checked at the added times, is 0.54-1.02x as large, 9-14%

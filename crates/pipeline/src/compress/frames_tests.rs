@@ -1,8 +1,9 @@
-//! Unit tests of the search on a clip's frames ([`super::search::frames`] and the search that
+//! Unit tests of the search on a clip's frames ([`super::frames::frames`] and the search that
 //! starts from them).
 
 #![allow(clippy::unwrap_used)]
 use super::eval::Sampled;
+use super::frames::*;
 use super::metric::*;
 use super::options::*;
 use super::reduce::Work;
@@ -92,6 +93,22 @@ fn rig_points(clip: &Clip, skeleton: &Skeleton) -> (Rig, Vec<Vec<[Vec3; 3]>>, Ve
     (rig, src, origins)
 }
 
+/// One joint turning about Y by its time in radians, keyed at `times`, at sample rate `rate`.
+fn turning_at(times: &[f32], rate: f32) -> Clip {
+    let tracks = vec![TrackCurves {
+        joint: "j0".into(),
+        rotation: Curve::new(
+            times.to_vec(),
+            times.iter().map(|&t| Quat::from_rotation_y(t)).collect(),
+        ),
+        ..Default::default()
+    }];
+    let last = *times.last().unwrap();
+    Clip::from_curves("turning", last, rate, false, false, tracks)
+        .unwrap()
+        .to_plain()
+}
+
 #[test]
 fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
     let skeleton = chain(6, 0.3);
@@ -117,16 +134,8 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
         })
         .take(121)
         .collect();
-    let tracks = vec![TrackCurves {
-        joint: "j0".into(),
-        rotation: Curve::new(
-            times.clone(),
-            times.iter().map(|&t| Quat::from_rotation_y(t)).collect(),
-        ),
-        ..Default::default()
-    }];
-    let clip = Clip::from_curves("offset", times[120], 30.0, false, false, tracks).unwrap();
-    let found = frames(&clip.to_plain()).unwrap();
+    let clip = turning_at(&times, 30.0);
+    let found = frames(&clip).unwrap();
     assert_eq!(found, (0..31).map(|k| 4 * k).collect::<Vec<_>>());
     // Frames that are more than half of the times are not searched first; at most four fifths,
     // they are the candidate keys of `frame_keys`.
@@ -139,6 +148,26 @@ fn the_frames_are_the_key_times_on_the_sample_rate_grid() {
 }
 
 #[test]
+fn frames_are_found_on_a_grid_a_little_off_the_nominal_rate() {
+    // A BVH's frame time of 0.0083333 s read as 120 Hz: frame 2,400 is 0.008 frames off the
+    // 120 Hz grid (beyond a thousandth of a frame). An added time halfway between every second
+    // pair of frames, as the importer adds them.
+    let mut times = Vec::new();
+    let mut frame_at = Vec::new();
+    for k in 0..2401u32 {
+        frame_at.push(times.len());
+        times.push(k as f32 * 0.0083333);
+        if k % 2 == 0 && k < 2400 {
+            times.push((k as f32 + 0.5) * 0.0083333);
+        }
+    }
+    let clip = turning_at(&times, 120.0);
+    assert_eq!(clip.sample_rate(), 120.0);
+    assert_eq!(clip.times().len(), 3601);
+    assert_eq!(frames_within(&clip, (4, 5)), Some(frame_at));
+}
+
+#[test]
 fn frames_as_keys_hold_where_they_are_more_than_half_of_the_times() {
     let skeleton = chain(6, 0.3);
     // 31 frames of 61 times: no search on the frames alone, but the frames as candidate keys.
@@ -146,7 +175,10 @@ fn frames_as_keys_hold_where_they_are_more_than_half_of_the_times() {
     let (rig, src, _) = rig_points(&clip, &skeleton);
     let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
     let options = CompressOptions::peers();
-    let (_, c, errors) = frame_keys((&clip, &whole), &rig, (0.001, true), &options).unwrap();
+    let (_, c, errors) = frame_keys((&clip, &whole), &rig, 0.001, |w| {
+        compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
+    })
+    .unwrap();
     let frame_times: Vec<f32> = frame_indices(31, 1)
         .into_iter()
         .map(|i| clip.times()[i])
@@ -294,7 +326,10 @@ fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
     // Nor with the frames as candidate keys.
     let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
     let options = CompressOptions::peers();
-    assert!(frame_keys((&clip, &whole), &rig, (0.001, true), &options).is_none());
+    assert!(frame_keys((&clip, &whole), &rig, 0.001, |w| {
+        compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
+    })
+    .is_none());
     // It needs keys between the frames, which the search on the frames alone cannot keep.
     let frame_times: Vec<f32> = frame_indices(9, 15)
         .into_iter()
@@ -376,7 +411,10 @@ fn a_search_on_the_frames_that_does_not_hold_is_not_kept_and_the_frames_as_keys_
         .map(|i| clip.times()[i])
         .collect();
     let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
-    let (size, c, errors) = frame_keys((&clip, &whole), &rig, (0.001, true), &options).unwrap();
+    let (size, c, errors) = frame_keys((&clip, &whole), &rig, 0.001, |w| {
+        compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
+    })
+    .unwrap();
     assert!(c.times().iter().all(|t| frame_times.contains(t)));
     assert_eq!(errors.len(), clip.times().len() * skeleton.len());
     let limits = joint_limits(&src, skeleton.len(), 0.001);

@@ -137,6 +137,7 @@ mod anchor_tests;
 #[cfg(test)]
 mod climb_tests;
 mod eval;
+mod frames;
 #[cfg(test)]
 mod frames_tests;
 mod metric;

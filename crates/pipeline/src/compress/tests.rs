@@ -2,6 +2,7 @@
 
 #![allow(clippy::unwrap_used)]
 use super::eval::*;
+use super::frames::thinned;
 use super::metric::*;
 use super::options::*;
 use super::quantize::*;

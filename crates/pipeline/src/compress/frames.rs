@@ -110,15 +110,9 @@ pub(super) fn frames_first(
     tolerance: f32,
     search_at: impl Fn(&Clip, &Sampled, f32) -> Option<Found>,
 ) -> Option<Found> {
-    let kept = frames(source)?;
     let times = source.times();
     let limits = joint_limits(src, rig.skeleton.len(), tolerance);
-    let mut work = Work::from_plain(source);
-    work.keep(&kept);
-    let mut clip = work.plain(source)?;
-    if !holds_against(rig, src, origins, &clip, times, &limits) {
-        return None;
-    }
+    let (_, mut clip) = holding(source, &frames(source)?, (rig, src, origins), &limits)?;
     let mut sampled = Sampled::new(rig, &clip, clip.times());
     // Frames that linear interpolation between their neighbours reproduces (an export that keys
     // a curve densely on a fine grid) are left out as [`thinned`] leaves out times, for the same
@@ -170,16 +164,27 @@ pub(super) fn frame_keys(
     tolerance: f32,
     search_keys: impl FnOnce(&Work) -> Option<Found>,
 ) -> Option<Found> {
-    let kept = frames_within(source, (4, 5))?;
-    let times = source.times();
     let (src, origins) = (&*whole.points, whole.origins.as_slice());
     let limits = joint_limits(src, rig.skeleton.len(), tolerance);
-    let mut work = Work::from_plain(source);
-    work.keep(&kept);
-    if !holds_against(rig, src, origins, &work.plain(source)?, times, &limits) {
-        return None;
-    }
+    let kept = frames_within(source, (4, 5))?;
+    let (work, _) = holding(source, &kept, (rig, src, origins), &limits)?;
     search_keys(&work)
+}
+
+/// `source` keyed at its times `kept` alone, as a work and as a plain clip, when that clip,
+/// interpolated as the runtime does, is within `limits` at every source time (`src`, `origins`:
+/// the source's error points and their origins); `None` otherwise (nothing keyed on those times
+/// alone can hold then).
+fn holding(
+    source: &Clip,
+    kept: &[usize],
+    (rig, src, origins): (&Rig, &[Vec<[Vec3; 3]>], &[Vec3]),
+    limits: &[f32],
+) -> Option<(Work, Clip)> {
+    let mut work = Work::from_plain(source);
+    work.keep(kept);
+    let clip = work.plain(source)?;
+    holds_against(rig, src, origins, &clip, source.times(), limits).then_some((work, clip))
 }
 
 /// A result of the search (`super::search`): its record size, the clip, and its errors at every

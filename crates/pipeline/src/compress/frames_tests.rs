@@ -173,7 +173,7 @@ fn frames_as_keys_hold_where_they_are_more_than_half_of_the_times() {
     // 31 frames of 61 times: no search on the frames alone, but the frames as candidate keys.
     let clip = densified_swing(&skeleton, 31, 1).to_plain();
     let (rig, src, _) = rig_points(&clip, &skeleton);
-    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let whole = Sampled::new(&rig, &clip, clip.times());
     let options = CompressOptions::peers();
     let (_, c, errors) = frame_keys((&clip, &whole), &rig, 0.001, |w| {
         compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
@@ -324,7 +324,7 @@ fn frames_whose_interpolation_leaves_the_tolerance_are_not_searched_alone() {
     });
     assert!(none.is_none());
     // Nor with the frames as candidate keys.
-    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let whole = Sampled::new(&rig, &clip, clip.times());
     let options = CompressOptions::peers();
     assert!(frame_keys((&clip, &whole), &rig, 0.001, |w| {
         compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
@@ -410,7 +410,7 @@ fn a_search_on_the_frames_that_does_not_hold_is_not_kept_and_the_frames_as_keys_
         .into_iter()
         .map(|i| clip.times()[i])
         .collect();
-    let whole = super::eval::Sampled::new(&rig, &clip, clip.times());
+    let whole = Sampled::new(&rig, &clip, clip.times());
     let (size, c, errors) = frame_keys((&clip, &whole), &rig, 0.001, |w| {
         compensated_first(w, (&clip, Some(&whole), &rig, 0.001), true, &options, true)
     })

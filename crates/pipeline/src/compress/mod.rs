@@ -73,7 +73,8 @@
 //! of the times but at most four fifths (no search on the frames alone then). Rounds on the
 //! frames and the times where the last one failed (sessions 30-34) moved the failures to other
 //! times between frames and, on some captures, failed four times over before the whole source
-//! was searched at twice the bytes (docs/performance.md, session 35). A search on every imported time spends part of the
+//! was searched at twice the bytes (docs/performance.md, session 35). A search on every imported
+//! time spends part of the
 //! tolerance on key reduction at the added times, where the runtime's nlerp between frames parts
 //! from the file's slerp, and keeps keys between frames and more bits; on motion captures exported
 //! to glTF the result on the frames, checked at the added times, is 0.54-1.02x as large, 9-14%

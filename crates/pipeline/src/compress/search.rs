@@ -554,9 +554,9 @@ pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
 /// The search on the source's frames first ([`frames_first`]; its result, when one holds, for
 /// `Fast` and `Default`), then, where it did not hold (or the frames are more than half of the
 /// times) and the source does not thin, the search with the frames as the only candidate keys,
-/// measured at every time ([`frame_keys`]), then on
-/// a source of thinned times, then (when it found nothing that
-/// holds at every source time, or for `Max`) on the whole source; the smallest result, with its
+/// measured at every time ([`frame_keys`]), then on a source of thinned times, then (when it
+/// found nothing that holds at every source time, or for `Max`) on the whole source; the smallest
+/// result, with its
 /// errors at every source time. `whole`: the source sampled at its times.
 ///
 /// When the search on the frames does not hold and the source thins, the thinned source is

@@ -236,8 +236,9 @@ pub struct CompressArgs {
     #[arg(long, value_name = "D")]
     pub error_distance: Option<f32>,
     /// How hard the clip encoder searches for small clips (every effort keeps the tolerance):
-    /// `fast` tries fewer layouts, `max` more (never larger than `default`); `max` also builds
-    /// each LOD step the plain ways and keeps the closest (docs/lod.md).
+    /// `fast` tries fewer layouts and does not refine long clips' widths, `max` more (never
+    /// larger than `default`); `max` also builds each LOD step the plain ways and keeps the
+    /// closest (docs/lod.md).
     #[arg(long, value_enum, default_value_t = EffortArg::Default)]
     pub effort: EffortArg,
 }

@@ -52,7 +52,9 @@
 //!    segment holds within the limits; where a rung does not, the components of the joint where
 //!    it failed and of its ancestors stay, and the rung is tried again without them (the clip's
 //!    ladder stops at its hardest segment and joint; the rest climb further), so that the first
-//!    round's tries start nearer their result (docs/performance.md, session 34).
+//!    round's tries start nearer their result (docs/performance.md, session 34). `Fast` skips
+//!    this step on a clip of more than `FAST_REFINED_VOLUME` source times x joints: its work grows
+//!    with the times measured, and long captures keep the first widths (session 36).
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
 //!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the
@@ -138,6 +140,8 @@ mod anchor_tests;
 #[cfg(test)]
 mod climb_tests;
 mod eval;
+#[cfg(test)]
+mod fast_tests;
 mod frames;
 #[cfg(test)]
 mod frames_tests;

@@ -24,6 +24,16 @@ pub(super) const KEY_BUDGETS: [f32; 3] = [0.5, 0.7, 0.85];
 /// 0.5 alone +6.7% / +1.9% (Fox Walk past gltf2ozz's size), 0.85 alone smaller in all but slower
 /// than the three (1.32x at 0.001 @ 0.1) (docs/performance.md, session 32).
 pub(super) const FAST_KEY_BUDGET: f32 = 0.7;
+/// The most source times x joints of a clip whose widths [`Effort::Fast`] refines (step 4's
+/// one-bit tries); a larger clip keeps the widths of its first-width ladder, measured and checked
+/// like every result. The refinement's work grows with the times it measures, and on long
+/// captures it was two thirds of the encoder's time (cmu_01_01 exported to glTF, 27 joints x
+/// 3,442 times: 173 -> 69 ms on two threads, +16% bytes at 0.001 @ 0.1, still 0.40x gltf2ozz's);
+/// on a short clip it costs a few milliseconds and buys the bytes that keep `fast` below
+/// gltf2ozz's size (Fox Walk, 20 x 157: 4,135 bytes refined, 4,495 not, gltf2ozz 4,341;
+/// ninja.ms3d, 28 x 300: 22,192 refined, 27,455 not, gltf2ozz 24,311, so not 8,192)
+/// (docs/performance.md, session 36).
+pub(super) const FAST_REFINED_VOLUME: usize = 32_768;
 /// Rungs of the first-width ladder (factors of 2^(1/4)) below the tolerance at which the first
 /// layout's ladder starts: at half the tolerance. A uniform budget is per component, and a joint's
 /// error gathers several components' and its parents', so clips with real motion pass 3 to 7 rungs
@@ -48,7 +58,8 @@ pub(super) const MAX_DESCENDED: usize = 8;
 ///
 /// - `Fast`: one key budget ([`FAST_KEY_BUDGET`]) where the default tries three, and its
 ///   candidate refined without the graded first rounds ([`super::search::THRESHOLDS`]): every
-///   round at the full limit.
+///   round at the full limit; a clip of more than [`FAST_REFINED_VOLUME`] times x joints is not
+///   refined (the first-width ladder's widths).
 /// - `Default`: the search of the module docs.
 /// - `Max`: the default's candidates (the same ones, so never a larger result) and more key budgets
 ///   ([`MAX_EXTRA_KEY_BUDGETS`]) and segment lengths ([`MAX_EXTRA_SEGMENTS`]), with up to

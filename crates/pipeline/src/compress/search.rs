@@ -7,8 +7,9 @@ use super::metric::{
 };
 use super::options::{
     ClipCompressionReport, CompressOptions, Effort, KeptPlain, DEFAULT_RELATIVE_DISTANCE,
-    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, FIRST_RUNGS_DOWN, KEY_BUDGETS,
-    MAX_DESCENDED, MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME, SHORT_CLIP,
+    DEFAULT_RELATIVE_TOLERANCE, DESCENDED, FAST_KEY_BUDGET, FAST_REFINED_VOLUME, FIRST_RUNGS_DOWN,
+    KEY_BUDGETS, MAX_DESCENDED, MAX_EXTRA_KEY_BUDGETS, MAX_EXTRA_SEGMENTS, PARALLEL_VOLUME,
+    SHORT_CLIP,
 };
 use super::quantize::{Components, Layout};
 use super::reduce::{reduce_keys, simplify_channels, Work};
@@ -380,6 +381,8 @@ pub(super) fn compress_work(
     // One refinement (`Fast` and `Default`) spreads its own tries over the threads; `Max`'s
     // several candidates are refined side by side instead.
     let alone = par && chosen.len() == 1;
+    // `Fast` on a long clip: the ladder's widths (the refinement's work grows with the times).
+    let refines = effort != Effort::Fast || times.len() * rig.skeleton.len() <= FAST_REFINED_VOLUME;
     let refined: Vec<Option<Found>> = map_in_order(chosen, par, |(li, start)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
@@ -388,8 +391,9 @@ pub(super) fn compress_work(
             Start::Bits(bits) => Eval::new(&ctx, layout, w, bits, compensate),
         };
         // The starting widths and stored integers: encoded only if the refined state does not
-        // hold at every source time (it always has on the corpus).
-        let start = (e.bits.clone(), e.qi.clone());
+        // hold at every source time (it always has on the corpus); an unrefined state is its
+        // own start.
+        let start = refines.then(|| (e.bits.clone(), e.qi.clone()));
         // Fast: every round at threshold 1 (no graded first rounds): 15-25% less work for
         // 0.3-2.2% more bytes on the corpus's clips (docs/performance.md, session 10).
         let thresholds: &[f32] = if effort == Effort::Fast {
@@ -397,15 +401,16 @@ pub(super) fn compress_work(
         } else {
             &THRESHOLDS
         };
-        descend(&mut e, alone, thresholds, climbs);
+        if refines {
+            descend(&mut e, alone, thresholds, climbs);
+        }
         let holds = |c: Clip| {
             let errors = errors_against(rig, src, origins, &c, times);
             within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
         };
         e.encode(w).and_then(holds).or_else(|| {
-            layout
-                .encode(&start.0, &start.1, w, ctx.like)
-                .and_then(holds)
+            let (bits, qi) = start?;
+            layout.encode(&bits, &qi, w, ctx.like).and_then(holds)
         })
     });
     let mut best: Option<Found> = None;

@@ -274,22 +274,14 @@ pub(super) fn add_probe(probes: &mut Probes, i: usize) {
 }
 
 impl<'a> Eval<'a> {
-    /// The state of `work` quantized with `bits`. With `check`, also whether every joint is within
-    /// its limit at every source time: `Err(i)` names a source time `i` where one is not, and the
-    /// poses are then computed only up to there (the state is for the check alone); `Ok(i)` names
-    /// the source time where the largest ratio of a joint's error to its limit is (0 without the
-    /// check). `probes`: source times to check first (where a previous check failed, where a
-    /// previous passing one had its largest error): their keys are quantized out of order, which
-    /// changes nothing, as a key's quantization reads no other key.
-    pub(super) fn build(
+    /// The state of `work` at `bits` before any key is quantized or any time computed.
+    fn unquantized(
         ctx: &'a Ctx<'a>,
         layout: &'a Layout,
         work: &Work,
         bits: Vec<u8>,
         compensate: bool,
-        check: bool,
-        probes: Probes,
-    ) -> (Eval<'a>, Result<usize, usize>) {
+    ) -> Eval<'a> {
         let rig = ctx.rig;
         let nj = rig.skeleton.len();
         let parents = rig.skeleton.parents();
@@ -354,7 +346,7 @@ impl<'a> Eval<'a> {
         }
         let nc = layout.comps.len();
         let n = layout.keys;
-        let mut e = Eval {
+        Eval {
             ctx,
             layout,
             compensate,
@@ -390,7 +382,48 @@ impl<'a> Eval<'a> {
             seg_times,
             first_key: 0,
             first_time: 0,
-        };
+        }
+    }
+
+    /// The state of `work` quantized with `bits`, every key, and no source time computed: its
+    /// stored integers (the same as [`Eval::build`]'s, key for key) for an encoding whose check
+    /// is the runtime's ([`super::metric::errors_against`]) rather than this state's.
+    pub(super) fn quantized(
+        ctx: &'a Ctx<'a>,
+        layout: &'a Layout,
+        work: &Work,
+        bits: Vec<u8>,
+        compensate: bool,
+    ) -> Eval<'a> {
+        let mut e = Eval::unquantized(ctx, layout, work, bits, compensate);
+        let n = layout.keys;
+        if n * e.nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+            e.quantize_keys_side_by_side(0..n, 2 * rayon::current_num_threads());
+        } else {
+            e.requantize_keys(0..n, &mut KeyRow::default());
+        }
+        e
+    }
+
+    /// The state of `work` quantized with `bits`. With `check`, also whether every joint is within
+    /// its limit at every source time: `Err(i)` names a source time `i` where one is not, and the
+    /// poses are then computed only up to there (the state is for the check alone); `Ok(i)` names
+    /// the source time where the largest ratio of a joint's error to its limit is (0 without the
+    /// check). `probes`: source times to check first (where a previous check failed, where a
+    /// previous passing one had its largest error): their keys are quantized out of order, which
+    /// changes nothing, as a key's quantization reads no other key.
+    pub(super) fn build(
+        ctx: &'a Ctx<'a>,
+        layout: &'a Layout,
+        work: &Work,
+        bits: Vec<u8>,
+        compensate: bool,
+        check: bool,
+        probes: Probes,
+    ) -> (Eval<'a>, Result<usize, usize>) {
+        let mut e = Eval::unquantized(ctx, layout, work, bits, compensate);
+        let nj = e.nj;
+        let n = layout.keys;
         let mut row = KeyRow::default();
         for &i in probes.iter().flatten() {
             if !check || i >= e.at.len() {

@@ -8,7 +8,7 @@ use super::metric::*;
 use super::options::*;
 use super::reduce::Work;
 use super::search::*;
-use super::tests::{chain, densified_swing};
+use super::tests::{chain, densified_swing, on_threads};
 use sinew_core::glam::{Quat, Vec3};
 use sinew_core::{Clip, Curve, Skeleton, TrackCurves};
 
@@ -430,19 +430,30 @@ fn a_search_on_the_frames_that_does_not_hold_is_not_kept_and_the_frames_as_keys_
 
 #[test]
 fn holds_against_agrees_with_the_errors_at_every_time() {
-    let skeleton = chain(4, 0.3);
-    let clip = fast_turns(4, 9, 15, 1.2).to_plain();
-    let (rig, src, origins) = rig_points(&clip, &skeleton);
-    let limits = joint_limits(&src, skeleton.len(), 0.001);
-    let mut work = Work::from_plain(&clip);
-    work.keep(&frames(&clip).unwrap());
-    let on_frames = work.plain(&clip).unwrap();
-    for (candidate, expected) in [(&clip, true), (&on_frames, false)] {
-        let errors = errors_against(&rig, &src, &origins, candidate, clip.times());
-        assert_eq!(within_limits(&errors, &limits), expected);
+    // 4 joints x 129 times: one pass; 8 x 625: chunks side by side, at 1 to 3 threads.
+    for (joints, keys) in [(4, 9), (8, 40)] {
+        let skeleton = chain(joints, 0.3);
+        let clip = fast_turns(joints, keys, 15, 1.2).to_plain();
+        let (rig, src, origins) = rig_points(&clip, &skeleton);
         assert_eq!(
-            holds_against(&rig, &src, &origins, candidate, clip.times(), &limits),
-            expected
+            rig.side_by_side(clip.times().len()),
+            joints == 8,
+            "{} times",
+            clip.times().len()
         );
+        let limits = joint_limits(&src, skeleton.len(), 0.001);
+        let mut work = Work::from_plain(&clip);
+        work.keep(&frames(&clip).unwrap());
+        let on_frames = work.plain(&clip).unwrap();
+        for (candidate, expected) in [(&clip, true), (&on_frames, false)] {
+            let errors = errors_against(&rig, &src, &origins, candidate, clip.times());
+            assert_eq!(within_limits(&errors, &limits), expected);
+            for threads in [1, 2, 3] {
+                let holds = on_threads(threads, || {
+                    holds_against(&rig, &src, &origins, candidate, clip.times(), &limits)
+                });
+                assert_eq!(holds, expected, "{joints} joints, {threads} threads");
+            }
+        }
     }
 }

@@ -524,7 +524,9 @@ pub(super) fn runtime_points(
 }
 
 /// Whether `candidate` is within `limits` (per joint) at every one of `times`, stopping at the
-/// first time it is not (one pass of the runtime's sampler over the times, in order).
+/// first time it is not (a pass of the runtime's sampler over the times, in order; on a long
+/// clip in chunks side by side, as [`errors_against`], each stopping where it fails and the rest
+/// not started once one has: the same verdict at any thread count).
 pub(super) fn holds_against(
     rig: &Rig,
     src: &[Vec<[Vec3; 3]>],
@@ -533,16 +535,27 @@ pub(super) fn holds_against(
     times: &[f32],
     limits: &[f32],
 ) -> bool {
-    let mut holds = true;
-    runtime_points(rig, candidate, times, origins, |k, pts| {
-        holds = src.get(k).is_some_and(|s| {
-            point_error(s, pts)
-                .zip(limits)
-                .all(|(e, &l)| !exceeds(e, l))
+    let holds_from = |first: usize, times: &[f32]| {
+        let origins = origins.get(first * rig.anchors.len()..).unwrap_or(&[]);
+        let mut holds = true;
+        runtime_points(rig, candidate, times, origins, |k, pts| {
+            holds = src.get(first + k).is_some_and(|s| {
+                point_error(s, pts)
+                    .zip(limits)
+                    .all(|(e, &l)| !exceeds(e, l))
+            });
+            !holds
         });
-        !holds
-    });
-    holds
+        holds
+    };
+    if rig.side_by_side(times.len()) {
+        times
+            .par_chunks(TIMES_PER_CHUNK)
+            .enumerate()
+            .all(|(n, chunk)| holds_from(n * TIMES_PER_CHUNK, chunk))
+    } else {
+        holds_from(0, times)
+    }
 }
 
 /// True when `error` is above `limit` or not a number.

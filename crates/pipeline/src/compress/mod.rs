@@ -54,7 +54,10 @@
 //!    ladder stops at its hardest segment and joint; the rest climb further), so that the first
 //!    round's tries start nearer their result (docs/performance.md, session 34). `Fast` skips
 //!    this step on a clip of more than `FAST_REFINED_VOLUME` source times x joints: its work grows
-//!    with the times measured, and long captures keep the first widths (session 36).
+//!    with the times measured, and long captures keep the first widths (session 36); there the
+//!    layout step 5 chooses, when the ladder measured another, is quantized at the ladder's
+//!    budget and checked by the runtime's sampler alone (its own ladder from that budget only
+//!    where that check fails).
 //! 5. Step 3 runs for every set of kept keys from step 2 on one segment length (16); its budget
 //!    gives every other segment length (32, and for short clips 64 and lengths that split the clip
 //!    into 1 to 4 equal segments) its a-priori widths and so its size, without measuring; the
@@ -152,6 +155,8 @@ mod reduce;
 #[cfg(test)]
 mod reduce_tests;
 mod refine;
+#[cfg(test)]
+mod report_tests;
 mod search;
 mod segment;
 #[cfg(test)]

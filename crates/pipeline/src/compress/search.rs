@@ -221,10 +221,12 @@ pub(super) fn first_eval<'a>(
     found.map(|e| (budget, e))
 }
 
-/// Where a refinement starts: a state already measured, or first bit widths to build one from.
+/// Where a refinement starts: a state already measured, first bit widths to build one from, or
+/// (not refined) a state quantized at a budget and not measured ([`estimated_candidates`]).
 pub(super) enum Start<'a> {
     State(Box<Eval<'a>>),
     Bits(Vec<u8>),
+    Unmeasured(Box<Eval<'a>>, f32),
 }
 
 /// The thresholds of the first rounds of [`descend`] (fractions of the joints' limits).
@@ -357,18 +359,31 @@ pub(super) fn compress_work(
     let layouts: Vec<(usize, Layout, bool)> = map_in_order(plan, par, |(wi, l, core)| {
         (wi, Layout::with_segments(&bases[wi], l), core)
     });
+    // `Fast` on a long clip: the ladder's widths (the refinement's work grows with the times),
+    // and a chosen layout the ladder did not measure checked by the runtime's sampler alone.
+    let refines = effort != Effort::Fast || times.len() * rig.skeleton.len() <= FAST_REFINED_VOLUME;
     let mut chosen: Vec<(usize, Start)> = estimated_candidates(
-        &ctx, &layouts, &works, source, tolerance, compensate, par, DESCENDED,
+        &ctx,
+        &layouts,
+        &works,
+        source,
+        tolerance,
+        compensate,
+        par,
+        (DESCENDED, refines),
     )
     .into_iter()
-    .map(|(li, e)| (li, Start::State(Box::new(e))))
+    .map(|(li, e, unmeasured)| match unmeasured {
+        Some(budget) => (li, Start::Unmeasured(Box::new(e), budget)),
+        None => (li, Start::State(Box::new(e))),
+    })
     .collect();
     if effort == Effort::Max {
         for (li, bits) in
             exhaustive_candidates(&ctx, &layouts, &works, source, tolerance, compensate, par)
         {
             let known = chosen.iter().any(|(l, start)| match start {
-                Start::State(e) => *l == li && e.bits == bits,
+                Start::State(e) | Start::Unmeasured(e, _) => *l == li && e.bits == bits,
                 Start::Bits(b) => *l == li && *b == bits,
             });
             if !known {
@@ -381,14 +396,27 @@ pub(super) fn compress_work(
     // One refinement (`Fast` and `Default`) spreads its own tries over the threads; `Max`'s
     // several candidates are refined side by side instead.
     let alone = par && chosen.len() == 1;
-    // `Fast` on a long clip: the ladder's widths (the refinement's work grows with the times).
-    let refines = effort != Effort::Fast || times.len() * rig.skeleton.len() <= FAST_REFINED_VOLUME;
     let refined: Vec<Option<Found>> = map_in_order(chosen, par, |(li, start)| {
         let (wi, layout, _) = &layouts[li];
         let w = &works[*wi];
+        let holds = |c: Clip| {
+            let errors = errors_against(rig, src, origins, &c, times);
+            within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
+        };
         let mut e = match start {
             Start::State(e) => *e,
             Start::Bits(bits) => Eval::new(&ctx, layout, w, bits, compensate),
+            Start::Unmeasured(e, budget) => {
+                // Where the runtime's check does not hold, the layout's ladder from its
+                // budget, as the default measures it.
+                return e.encode(w).and_then(holds).or_else(|| {
+                    drop(e);
+                    let mut probe = [None; PROBES];
+                    let measured =
+                        first_eval(&ctx, layout, w, budget, compensate, alone, &mut probe);
+                    measured.and_then(|(_, e)| e.encode(w)).and_then(holds)
+                });
+            }
         };
         // The starting widths and stored integers: encoded only if the refined state does not
         // hold at every source time (it always has on the corpus); an unrefined state is its
@@ -404,10 +432,6 @@ pub(super) fn compress_work(
         if refines {
             descend(&mut e, alone, thresholds, climbs);
         }
-        let holds = |c: Clip| {
-            let errors = errors_against(rig, src, origins, &c, times);
-            within_limits(&errors, &ctx.limits).then(|| (clip_record_size(&c), c, errors))
-        };
         e.encode(w).and_then(holds).or_else(|| {
             let (bits, qi) = start?;
             layout.encode(&bits, &qi, w, ctx.like).and_then(holds)
@@ -427,6 +451,10 @@ pub(super) fn compress_work(
 /// a-priori widths and so its size, without measuring them (the budget depends on the kept keys
 /// far more than on the segment length). The `count` smallest layouts (by that size; the first of
 /// equals) are then measured from that budget. Returns (layout, first bit widths).
+/// Without `measures`, a chosen layout its work's ladder did not measure is not measured either:
+/// its state is quantized at that budget ([`Eval::quantized`]) and returned with the budget, for
+/// a caller that checks its encoding with the runtime's sampler (and measures it from the
+/// budget only if that fails).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn estimated_candidates<'a>(
     ctx: &'a Ctx<'a>,
@@ -436,8 +464,8 @@ pub(super) fn estimated_candidates<'a>(
     tolerance: f32,
     compensate: bool,
     par: bool,
-    count: usize,
-) -> Vec<(usize, Eval<'a>)> {
+    (count, measures): (usize, bool),
+) -> Vec<(usize, Eval<'a>, Option<f32>)> {
     // (estimated size, layout, budget, the measured state if any)
     let mut sized: Vec<(usize, usize, f32, Option<Eval<'a>>)> = Vec::new();
     // The first layout's ladder starts `FIRST_RUNGS_DOWN` rungs below the tolerance (one at a
@@ -491,7 +519,12 @@ pub(super) fn estimated_candidates<'a>(
     map_in_order(sized, par && count > 1, |(_, li, budget, measured)| {
         let (wi, layout, _) = &layouts[li];
         match measured {
-            Some(e) => Some((li, e)),
+            Some(e) => Some((li, e, None)),
+            None if !measures => {
+                let bits = layout.first_bits(budget);
+                let e = Eval::quantized(ctx, layout, &works[*wi], bits, compensate);
+                Some((li, e, Some(budget)))
+            }
             None => {
                 let mut probe = probe;
                 first_eval(
@@ -503,7 +536,7 @@ pub(super) fn estimated_candidates<'a>(
                     alone,
                     &mut probe,
                 )
-                .map(|(_, e)| (li, e))
+                .map(|(_, e)| (li, e, None))
             }
         }
     })
@@ -547,13 +580,14 @@ pub(super) fn exhaustive_candidates(
         .collect()
 }
 
+/// The `p` quantile of `errors` (the value a sort would put at rank ceil(n p)); reorders them.
+/// A selection, not a sort: a long capture's errors are about 100,000 values.
 pub(super) fn percentile(errors: &mut [f32], p: f32) -> f32 {
     if errors.is_empty() {
         return 0.0;
     }
-    errors.sort_by(f32::total_cmp);
     let i = ((errors.len() as f32 * p).ceil() as usize).clamp(1, errors.len()) - 1;
-    errors[i]
+    *errors.select_nth_unstable_by(i, f32::total_cmp).1
 }
 
 /// The search on the source's frames first ([`frames_first`]; its result, when one holds, for

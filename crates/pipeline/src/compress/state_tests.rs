@@ -37,10 +37,17 @@ fn the_candidates_chosen_are_the_first_of_a_longer_list() {
         .collect();
     let pick = |count: usize| -> Vec<(usize, Vec<u8>, Vec<Vec<u32>>)> {
         estimated_candidates(
-            &ctx, &layouts, &works, &source, TOLERANCE, true, false, count,
+            &ctx,
+            &layouts,
+            &works,
+            &source,
+            TOLERANCE,
+            true,
+            false,
+            (count, true),
         )
         .into_iter()
-        .map(|(li, e)| (li, e.bits, e.qi))
+        .map(|(li, e, _)| (li, e.bits, e.qi))
         .collect()
     };
     let (one, all) = (pick(1), pick(layouts.len()));
@@ -121,4 +128,93 @@ fn bit_patterns(transforms: &[Affine3A]) -> Vec<[u32; 12]> {
         .iter()
         .map(|m| m.to_cols_array().map(f32::to_bits))
         .collect()
+}
+
+#[test]
+fn a_state_quantized_without_its_times_stores_what_a_build_stores() {
+    // `Eval::quantized` (fast's unmeasured layouts) quantizes every key and computes no time: its
+    // stored integers and decoded values are a checked build's, key for key, at 1 to 3 threads
+    // (6 joints x 3,000 keys: its keys in chunks side by side on two and three), and so is the
+    // clip it encodes, with and without chain compensation.
+    let (source, rig) = moving_chain(6, 3000);
+    let work = Work::from_plain(&source);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    for compensate in [true, false] {
+        let layout = Layout::new(&work, &rig, 32, compensate);
+        let bits = layout.first_bits(0.0004);
+        let (built, _) = on_threads(1, || {
+            Eval::build(
+                &ctx,
+                &layout,
+                &work,
+                bits.clone(),
+                compensate,
+                true,
+                [None; PROBES],
+            )
+        });
+        let dec_bits = |e: &Eval| -> Vec<Vec<u32>> {
+            e.dec
+                .iter()
+                .map(|d| d.iter().map(|x| x.to_bits()).collect())
+                .collect()
+        };
+        assert!(built.qi.iter().flatten().any(|&q| q != 0));
+        let clip = built.encode(&work).unwrap();
+        for threads in [1, 2, 3] {
+            let quantized = on_threads(threads, || {
+                Eval::quantized(&ctx, &layout, &work, bits.clone(), compensate)
+            });
+            assert_eq!(quantized.qi, built.qi, "{threads} threads");
+            assert_eq!(dec_bits(&quantized), dec_bits(&built), "{threads} threads");
+            assert_eq!(quantized.encode(&work).unwrap(), clip, "{threads} threads");
+        }
+    }
+}
+
+#[test]
+fn without_measures_a_layout_its_ladder_did_not_measure_comes_quantized_at_the_budget() {
+    // Two layouts of one work, both chosen: the first is measured by the work's ladder either
+    // way; without `measures` the second is not measured but quantized at the budget the
+    // ladder reached, at its own a-priori widths.
+    let (source, rig) = moving_chain(6, 400);
+    let ctx = Ctx::new(&rig, &source, source.times(), 0.001);
+    let works = vec![Work::from_plain(&source)];
+    let layouts: Vec<(usize, Layout, bool)> = [16, 32]
+        .map(|l| (0, Layout::new(&works[0], &rig, l, true), true))
+        .into_iter()
+        .collect();
+    let pick = |measures: bool| {
+        estimated_candidates(
+            &ctx,
+            &layouts,
+            &works,
+            &source,
+            0.001,
+            true,
+            false,
+            (2, measures),
+        )
+    };
+    let (measured, unmeasured) = (pick(true), pick(false));
+    assert_eq!(measured.len(), 2);
+    assert_eq!(unmeasured.len(), 2);
+    assert!(measured.iter().all(|c| c.2.is_none()));
+    let first = |c: &[(usize, Eval, Option<f32>)]| c.iter().position(|x| x.0 == 0).unwrap();
+    let (m0, u0) = (&measured[first(&measured)], &unmeasured[first(&unmeasured)]);
+    assert_eq!(u0.2, None);
+    assert_eq!((&u0.1.bits, &u0.1.qi), (&m0.1.bits, &m0.1.qi));
+    let u1 = unmeasured.iter().find(|x| x.0 == 1).unwrap();
+    let budget = u1.2.unwrap();
+    assert_eq!(u1.1.bits, layouts[1].1.first_bits(budget));
+    let (built, _) = Eval::build(
+        &ctx,
+        &layouts[1].1,
+        &works[0],
+        u1.1.bits.clone(),
+        true,
+        false,
+        [None; PROBES],
+    );
+    assert_eq!(u1.1.qi, built.qi);
 }

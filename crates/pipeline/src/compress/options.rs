@@ -28,7 +28,7 @@ pub(super) const FAST_KEY_BUDGET: f32 = 0.7;
 /// one-bit tries); a larger clip keeps the widths of its first-width ladder, measured and checked
 /// like every result. The refinement's work grows with the times it measures, and on long
 /// captures it was two thirds of the encoder's time (cmu_01_01 exported to glTF, 27 joints x
-/// 3,442 times: 173 -> 69 ms on two threads, +16% bytes at 0.001 @ 0.1, still 0.40x gltf2ozz's);
+/// 3,442 times, 0.001 @ 0.1, one thread: 330 -> 135 ms, +16% bytes, still 0.40x gltf2ozz's);
 /// on a short clip it costs a few milliseconds and buys the bytes that keep `fast` below
 /// gltf2ozz's size (Fox Walk, 20 x 157: 4,135 bytes refined, 4,495 not, gltf2ozz 4,341;
 /// ninja.ms3d, 28 x 300: 22,192 refined, 27,455 not, gltf2ozz 24,311, so not 8,192)

@@ -186,6 +186,13 @@ pub(super) struct KeyRow {
 /// Joint-times from which [`Eval::build`] quantizes keys and computes times in chunks side by side
 /// (a long clip's passing check is a few milliseconds of work).
 const SIDE_BY_SIDE_BUILD: usize = 16 * 1024;
+
+/// Whether a pass over `volume` joint-keys or joint-times goes side by side ([`SIDE_BY_SIDE_BUILD`],
+/// and more than one thread to share it).
+fn goes_side_by_side(volume: usize) -> bool {
+    volume >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1
+}
+
 /// Joint-times below which a checked build keeps its local poses as it computes them (4 MiB of
 /// them): a shorter clip's are little memory, soon reused, and computing them again for the state
 /// a refinement starts from ([`Eval::fill_local`]) costs most of a pass (with 16 Ki here the
@@ -397,7 +404,7 @@ impl<'a> Eval<'a> {
     ) -> Eval<'a> {
         let mut e = Eval::unquantized(ctx, layout, work, bits, compensate);
         let n = layout.keys;
-        if n * e.nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+        if goes_side_by_side(n * e.nj) {
             e.quantize_keys_side_by_side(0..n, 2 * rayon::current_num_threads());
         } else {
             e.requantize_keys(0..n, &mut KeyRow::default());
@@ -440,7 +447,7 @@ impl<'a> Eval<'a> {
                 return (e, Err(i));
             }
         }
-        if e.at.len() * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+        if goes_side_by_side(e.at.len() * nj) {
             let verdict = e.build_side_by_side(check);
             return (e, verdict);
         }
@@ -781,7 +788,7 @@ impl<'a> Eval<'a> {
                 state.pose_into(state.first_time + t0 + t, row, &mut models);
             }
         };
-        if times * nj >= SIDE_BY_SIDE_BUILD && rayon::current_num_threads() > 1 {
+        if goes_side_by_side(times * nj) {
             local
                 .par_chunks_mut(MIN_TIMES_PER_CHUNK * nj)
                 .enumerate()

@@ -461,15 +461,9 @@ pub(super) fn errors_against(
 ) -> Vec<f32> {
     let errors_of = |first: usize, times: &[f32]| {
         let mut out = Vec::with_capacity(times.len() * rig.skeleton.len());
-        let origins = origins.get(first * rig.anchors.len()..).unwrap_or(&[]);
-        runtime_points(rig, candidate, times, origins, |k, pts| {
-            match src.get(first + k) {
-                Some(s) => {
-                    out.extend(point_error(s, pts));
-                    false
-                }
-                None => true,
-            }
+        beside_source((rig, src, origins), candidate, first, times, |s, pts| {
+            out.extend(point_error(s, pts));
+            false
         });
         out
     };
@@ -523,6 +517,25 @@ pub(super) fn runtime_points(
     }
 }
 
+/// [`runtime_points`] over `times`, the source's times from index `first` on (`src`, `origins`:
+/// the source's error points and origins at all its times): `stop` gets each time's source points
+/// and the candidate's. False when it stopped early, or at a time the source has no points for.
+fn beside_source(
+    (rig, src, origins): (&Rig, &[Vec<[Vec3; 3]>], &[Vec3]),
+    candidate: &Clip,
+    first: usize,
+    times: &[f32],
+    mut stop: impl FnMut(&[[Vec3; 3]], &[[Vec3; 3]]) -> bool,
+) -> bool {
+    let origins = origins.get(first * rig.anchors.len()..).unwrap_or(&[]);
+    let mut whole = true;
+    runtime_points(rig, candidate, times, origins, |k, pts| {
+        whole = src.get(first + k).is_some_and(|s| !stop(s, pts));
+        !whole
+    });
+    whole
+}
+
 /// Whether `candidate` is within `limits` (per joint) at every one of `times`, stopping at the
 /// first time it is not (a pass of the runtime's sampler over the times, in order; on a long
 /// clip in chunks side by side, as [`errors_against`], each stopping where it fails and the rest
@@ -536,17 +549,14 @@ pub(super) fn holds_against(
     limits: &[f32],
 ) -> bool {
     let holds_from = |first: usize, times: &[f32]| {
-        let origins = origins.get(first * rig.anchors.len()..).unwrap_or(&[]);
         let mut holds = true;
-        runtime_points(rig, candidate, times, origins, |k, pts| {
-            holds = src.get(first + k).is_some_and(|s| {
-                point_error(s, pts)
-                    .zip(limits)
-                    .all(|(e, &l)| !exceeds(e, l))
-            });
+        let whole = beside_source((rig, src, origins), candidate, first, times, |s, pts| {
+            holds = point_error(s, pts)
+                .zip(limits)
+                .all(|(e, &l)| !exceeds(e, l));
             !holds
         });
-        holds
+        holds && whole
     };
     if rig.side_by_side(times.len()) {
         times

@@ -185,8 +185,8 @@ pub(super) fn skeleton_report(s: &Skeleton) -> SkeletonReport {
 /// The report of one clip: timing, key counts, tracks and (with a skeleton) which joints it drives.
 pub fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> ClipReport {
     let mut keys = KeyCounts::default();
-    // Channels usually share their key times: each distinct list is added once, so the count of
-    // distinct times costs a sort of what is distinct, not of every channel's keys.
+    // Channels usually share their key times: each distinct list is added once, and the lists
+    // (each sorted) are merged rather than sorted together.
     let mut lists: Vec<&[f32]> = Vec::new();
     let mut tracks = Vec::with_capacity(c.tracks.len());
     let mut driven = Vec::new();
@@ -216,9 +216,7 @@ pub fn clip_report(c: &sinew_scene::SceneClip, skeleton: Option<&Skeleton>) -> C
         });
     }
     keys.total = keys.translation + keys.rotation + keys.scale;
-    let mut times: Vec<f32> = lists.concat();
-    times.sort_unstable_by(f32::total_cmp);
-    times.dedup();
+    let times = sinew_core::clip::union_of_times(&lists);
     let unmatched = skeleton.map(|s| {
         driven
             .iter()

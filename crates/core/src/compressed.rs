@@ -328,22 +328,37 @@ pub fn pack(
                 *to |= from;
             }
         };
+        // What each key writes, in the order it is written: per rotation whose index is not
+        // shared (its component, the index's bit offset, its number among the rotations), then
+        // the component's integer when it has bits (a component of 0 bits writes nothing).
+        let mut writes: Vec<(usize, u32, Option<usize>)> = Vec::with_capacity(comps);
+        let mut r = 0;
+        for c in 0..comps {
+            if rotation_starts[c] {
+                if fixed.get(r).is_none_or(|&i| i > 3) {
+                    writes.push((c, off[c] - 2, Some(r)));
+                }
+                r += 1;
+            }
+            if seg[c].bits > 0 {
+                writes.push((c, off[c], None));
+            }
+        }
         for k in 0..n {
             let base = k * record as usize;
-            let mut r = 0;
-            for c in 0..comps {
-                if rotation_starts[c] {
-                    if fixed.get(r).is_none_or(|&i| i > 3) {
-                        let idx = index[(first + k) * rotations + r];
-                        put(base + off[c] as usize - 2, u32::from(idx), 2);
-                    }
-                    r += 1;
+            for &(c, at, rotation) in &writes {
+                match rotation {
+                    Some(r) => put(
+                        base + at as usize,
+                        u32::from(index[(first + k) * rotations + r]),
+                        2,
+                    ),
+                    None => put(
+                        base + at as usize,
+                        q[(first + k) * comps + c],
+                        u32::from(seg[c].bits),
+                    ),
                 }
-                put(
-                    base + off[c] as usize,
-                    q[(first + k) * comps + c],
-                    u32::from(seg[c].bits),
-                );
             }
         }
         buf.truncate((record as usize * n).div_ceil(8));

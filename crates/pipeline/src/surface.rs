@@ -11,42 +11,52 @@ use sinew_core::glam::Vec3;
 
 /// Distance from `p` to triangle `abc` (closest point by Voronoi regions, after Ericson).
 pub fn point_triangle_distance(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    point_triangle_distance_squared(p, a, b, c).sqrt()
+}
+
+/// The square of [`point_triangle_distance`], whose square root it is bit for bit (a length is
+/// the square root of the dot product, and the square root keeps order, so the nearest of three
+/// corners is the root of the least square): a search compares squares and takes one root per
+/// nearer triangle.
+pub fn point_triangle_distance_squared(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f32 {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));
     if d1 <= 0.0 && d2 <= 0.0 {
-        return ap.length();
+        return ap.length_squared();
     }
     let bp = p - b;
     let (d3, d4) = (ab.dot(bp), ac.dot(bp));
     if d3 >= 0.0 && d4 <= d3 {
-        return bp.length();
+        return bp.length_squared();
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return (p - (a + ab * v)).length();
+        return (p - (a + ab * v)).length_squared();
     }
     let cp = p - c;
     let (d5, d6) = (ab.dot(cp), ac.dot(cp));
     if d6 >= 0.0 && d5 <= d6 {
-        return cp.length();
+        return cp.length_squared();
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return (p - (a + ac * w)).length();
+        return (p - (a + ac * w)).length_squared();
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return (p - (b + (c - b) * w)).length();
+        return (p - (b + (c - b) * w)).length_squared();
     }
     let denom = va + vb + vc;
     if denom == 0.0 || !denom.is_finite() {
-        return ap.length().min(bp.length()).min(cp.length());
+        return ap.length_squared()
+            .min(bp.length_squared())
+            .min(cp.length_squared());
     }
     let (v, w) = (vb / denom, vc / denom);
-    (p - (a + ab * v + ac * w)).length()
+    (p - (a + ab * v + ac * w)).length_squared()
 }
 
 /// Triangles bucketed in a uniform grid (by bounding box) for nearest-surface queries.
@@ -119,14 +129,13 @@ impl TriangleGrid {
             entries: Vec::new(),
         };
         let count = (dims[0] * dims[1] * dims[2]) as usize;
-        let spans: Vec<([i32; 3], [i32; 3])> = tris
+        let boxes: Vec<(Vec3, Vec3)> = tris
             .iter()
-            .map(|t| {
-                (
-                    g.coord(t[0].min(t[1]).min(t[2])),
-                    g.coord(t[0].max(t[1]).max(t[2])),
-                )
-            })
+            .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
+            .collect();
+        let spans: Vec<([i32; 3], [i32; 3])> = boxes
+            .iter()
+            .map(|&(lo, hi)| (g.coord(lo), g.coord(hi)))
             .collect();
         // Two passes (count, then fill) so every cell's list is one slice of `entries`.
         let mut starts = vec![0u32; count + 1];
@@ -155,10 +164,7 @@ impl TriangleGrid {
                 }
             }
         }
-        g.boxes = tris
-            .iter()
-            .map(|t| (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2])))
-            .collect();
+        g.boxes = boxes;
         g.tris = tris;
         g.starts = starts;
         g.entries = entries;
@@ -202,9 +208,11 @@ impl TriangleGrid {
             return (f32::INFINITY, u32::MAX);
         }
         let mut best = f32::INFINITY;
+        let mut best_squared = f32::INFINITY;
         let mut nearest = u32::MAX;
         if let Some(t) = self.tris.get(hint as usize) {
-            best = point_triangle_distance(p, t[0], t[1], t[2]);
+            best_squared = point_triangle_distance_squared(p, t[0], t[1], t[2]);
+            best = best_squared.sqrt();
             nearest = hint;
             if best <= floor {
                 return (best, nearest);
@@ -221,8 +229,9 @@ impl TriangleGrid {
         let c = self.coord(p);
         let max_r = self.dims.iter().copied().max().unwrap_or(1);
         // The triangles of one cell (those whose box is nearer than the best so far); true when
-        // the search may stop (a triangle within `floor`).
-        let visit = |x: i32, y: i32, z: i32, best: &mut (f32, u32)| -> bool {
+        // the search may stop (a triangle within `floor`). `best`: the distance, its triangle and
+        // the distance's square (a triangle whose square is not below it is not nearer: no root).
+        let visit = |x: i32, y: i32, z: i32, best: &mut (f32, u32, f32)| -> bool {
             let cell = self.flat([x, y, z]);
             let (s, e) = (self.starts[cell] as usize, self.starts[cell + 1] as usize);
             for &t in &self.entries[s..e] {
@@ -232,17 +241,20 @@ impl TriangleGrid {
                     continue;
                 }
                 let tri = &self.tris[t as usize];
-                let d = point_triangle_distance(p, tri[0], tri[1], tri[2]);
-                if d < best.0 {
-                    *best = (d, t);
-                }
-                if best.0 <= floor {
-                    return true;
+                let squared = point_triangle_distance_squared(p, tri[0], tri[1], tri[2]);
+                if squared < best.2 {
+                    let d = squared.sqrt();
+                    if d < best.0 {
+                        *best = (d, t, squared);
+                        if d <= floor {
+                            return true;
+                        }
+                    }
                 }
             }
             false
         };
-        let mut best = (best, nearest);
+        let mut best = (best, nearest, best_squared);
         for r in 0..=max_r {
             for z in (c[2] - r).max(0)..=(c[2] + r).min(self.dims[2] - 1) {
                 for y in (c[1] - r).max(0)..=(c[1] + r).min(self.dims[1] - 1) {
@@ -250,7 +262,7 @@ impl TriangleGrid {
                     if on_yz {
                         for x in (c[0] - r).max(0)..=(c[0] + r).min(self.dims[0] - 1) {
                             if visit(x, y, z, &mut best) {
-                                return best;
+                                return (best.0, best.1);
                             }
                         }
                     } else {
@@ -258,7 +270,7 @@ impl TriangleGrid {
                         // r = 0 every cell is on the shell).
                         for x in [c[0] - r, c[0] + r] {
                             if x >= 0 && x < self.dims[0] && visit(x, y, z, &mut best) {
-                                return best;
+                                return (best.0, best.1);
                             }
                         }
                     }
@@ -270,7 +282,7 @@ impl TriangleGrid {
                 break;
             }
         }
-        best
+        (best.0, best.1)
     }
 }
 

@@ -220,10 +220,9 @@ impl Clip {
             let first = *c.values.first()?;
             c.values.iter().all(|v| *v == first).then_some(first)
         }
-        let mut times: Vec<f32> = Vec::new();
-        // The key times last appended: a curve with the same times (bit for bit; most sources key
-        // every channel at the same frames) adds nothing that the sort and dedup below would keep.
-        let mut last: &[f32] = &[];
+        // Each animated channel's key times, but for a list the same (bit for bit) as the one
+        // before it: most sources key every channel at the same frames.
+        let mut lists: Vec<&[f32]> = Vec::new();
         let mut out_tracks = Vec::with_capacity(tracks.len());
         let mut stride = 0usize;
         for t in &tracks {
@@ -234,7 +233,7 @@ impl Clip {
                 channel_t = match constant(&t.translation) {
                     Some(v) => Channel::Constant(v),
                     None => {
-                        add_times(&mut times, &mut last, &t.translation.times);
+                        add_times(&mut lists, &t.translation.times);
                         stride += 3;
                         Channel::Animated((stride - 3) as u32)
                     }
@@ -244,7 +243,7 @@ impl Clip {
                 channel_r = match constant(&t.rotation) {
                     Some(v) => Channel::Constant(v.normalize()),
                     None => {
-                        add_times(&mut times, &mut last, &t.rotation.times);
+                        add_times(&mut lists, &t.rotation.times);
                         stride += 4;
                         Channel::Animated((stride - 4) as u32)
                     }
@@ -254,7 +253,7 @@ impl Clip {
                 channel_s = match constant(&t.scale) {
                     Some(v) => Channel::Constant(v),
                     None => {
-                        add_times(&mut times, &mut last, &t.scale.times);
+                        add_times(&mut lists, &t.scale.times);
                         stride += 3;
                         Channel::Animated((stride - 3) as u32)
                     }
@@ -267,8 +266,7 @@ impl Clip {
                 scale: channel_s,
             });
         }
-        times.sort_by(f32::total_cmp);
-        times.dedup();
+        let mut times = super::times::union_of_times(&lists);
         if times.is_empty() {
             times.push(0.0);
         }
@@ -636,15 +634,16 @@ impl Clip {
 }
 
 /// Appends a curve's key times to `times` unless they are bit for bit the ones appended last.
-fn add_times<'a>(times: &mut Vec<f32>, last: &mut &'a [f32], curve: &'a [f32]) {
-    let same = curve.len() == last.len()
-        && curve
-            .iter()
-            .zip(last.iter())
-            .all(|(a, b)| a.to_bits() == b.to_bits());
+fn add_times<'a>(lists: &mut Vec<&'a [f32]>, curve: &'a [f32]) {
+    let same = lists.last().is_some_and(|last| {
+        curve.len() == last.len()
+            && curve
+                .iter()
+                .zip(last.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+    });
     if !same {
-        times.extend_from_slice(curve);
-        *last = curve;
+        lists.push(curve);
     }
 }
 

@@ -31,8 +31,12 @@ mod key_cache;
 mod sampler;
 #[cfg(test)]
 mod tests;
+mod times;
+#[cfg(test)]
+mod times_tests;
 
 pub use crate::rotation::{nlerp, normalize_rotation};
 pub use binding::ClipBinding;
 pub use data::{Channel, ChannelEncoding, Clip, ClipError, Curve, Track, TrackCurves};
 pub use sampler::Sampler;
+pub use times::union_of_times;

@@ -382,9 +382,13 @@ impl<'a> Eval<'a> {
                 .map(|i| layout.params(i / nc.max(1), i % nc.max(1), bits[i]))
                 .collect(),
             bits,
-            qi: vec![vec![0; n]; nc],
-            dec: vec![vec![0.0; n]; nc],
-            raw: vec![vec![Quat::IDENTITY; n]; layout.index.len()],
+            // Each row made on its own: `vec![row; count]` would copy the first row into every
+            // other (a memcpy of megabytes on a long clip) where a zeroed allocation writes nothing.
+            qi: (0..nc).map(|_| vec![0; n]).collect(),
+            dec: (0..nc).map(|_| vec![0.0; n]).collect(),
+            raw: (0..layout.index.len())
+                .map(|_| vec![Quat::IDENTITY; n])
+                .collect(),
             key_rot: vec![Quat::IDENTITY; nj * n],
             seg_times,
             first_key: 0,

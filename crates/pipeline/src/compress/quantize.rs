@@ -401,7 +401,7 @@ impl Layout {
     pub(super) fn record_size(&self, bits: &[u8], work: &Work, like: &Clip) -> Option<usize> {
         let prefix = *self.prefix.get_or_init(|| {
             let zero = vec![0u8; bits.len()];
-            let qi = vec![vec![0u32; self.keys]; self.comps.len()];
+            let qi: Vec<Vec<u32>> = (0..self.comps.len()).map(|_| vec![0; self.keys]).collect();
             let size = clip_record_size(&self.encode(&zero, &qi, work, like)?);
             size.checked_sub(self.entries_size() + self.data_size(&zero))
         });

@@ -22,6 +22,27 @@ pub(super) struct WTrack {
     pub(super) s: WChan<Vec3>,
 }
 
+impl WTrack {
+    /// A track of no joint with every channel at its bind value: a candidate for one channel.
+    fn unbound() -> WTrack {
+        WTrack {
+            joint: String::new(),
+            t: WChan::Bind,
+            r: WChan::Bind,
+            s: WChan::Bind,
+        }
+    }
+
+    /// Channel `ch` (0 translation, 1 rotation, 2 scale) replaced by `from`'s.
+    fn take_channel(&mut self, ch: usize, from: WTrack) {
+        match ch {
+            0 => self.t = from.t,
+            1 => self.r = from.r,
+            _ => self.s = from.s,
+        }
+    }
+}
+
 #[derive(Clone)]
 pub(super) enum WChan<T> {
     Bind,
@@ -229,10 +250,12 @@ pub(super) fn simplify_channels<'p>(
             continue;
         };
         for ch in 0..3 {
+            // Each candidate holds channel `ch` alone (the others Bind, never read): the track's
+            // keys are not copied for each try (a long clip's are tens of kilobytes per channel).
             let mut candidates: Vec<WTrack> = Vec::new();
             let tr = &work.tracks[i];
             let mut with = |f: &dyn Fn(&mut WTrack)| {
-                let mut t = tr.clone();
+                let mut t = WTrack::unbound();
                 f(&mut t);
                 candidates.push(t);
             };
@@ -248,7 +271,7 @@ pub(super) fn simplify_channels<'p>(
                 0 if matches!(tr.t, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(v), Some(d)) = (&tr.t, d) {
                         if *v == d.translation {
-                            let mut t = tr.clone();
+                            let mut t = WTrack::unbound();
                             t.t = WChan::Bind;
                             exact = Some(t);
                         }
@@ -258,7 +281,7 @@ pub(super) fn simplify_channels<'p>(
                 1 if matches!(tr.r, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(q), Some(d)) = (&tr.r, d) {
                         if *q == d.rotation || -*q == d.rotation {
-                            let mut t = tr.clone();
+                            let mut t = WTrack::unbound();
                             t.r = WChan::Bind;
                             exact = Some(t);
                         }
@@ -268,7 +291,7 @@ pub(super) fn simplify_channels<'p>(
                 2 if matches!(tr.s, WChan::Constant(_)) && d.is_some() => {
                     if let (WChan::Constant(v), Some(d)) = (&tr.s, d) {
                         if *v == d.scale {
-                            let mut t = tr.clone();
+                            let mut t = WTrack::unbound();
                             t.s = WChan::Bind;
                             exact = Some(t);
                         }
@@ -307,7 +330,7 @@ pub(super) fn simplify_channels<'p>(
                 // The same value (a rotation possibly negated, which gives the same matrix, bit
                 // for bit: its entries are products of two components): every local and model
                 // transform of the state stays as it is.
-                work.tracks[i] = t;
+                work.tracks[i].take_channel(ch, t);
                 continue;
             }
             for t in candidates {
@@ -315,7 +338,7 @@ pub(super) fn simplify_channels<'p>(
                     continue;
                 };
                 if state.try_channel(rig, src, joint, value, budget) {
-                    work.tracks[i] = t;
+                    work.tracks[i].take_channel(ch, t);
                     break;
                 }
             }

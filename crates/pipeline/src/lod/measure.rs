@@ -306,9 +306,15 @@ pub(super) fn hinted_posed_far(
             })
             .collect()
     };
+    // The poses side by side (a few thousand points each, against one triangle each): the first
+    // pose of the largest distance is the same whatever runs where.
+    let per_pose: Vec<Vec<f32>> = base_posed
+        .par_iter()
+        .zip(source_posed)
+        .map(|(base, source)| distances(base, source))
+        .collect();
     let mut worst: (f32, Vec<f32>) = (0.0, Vec::new());
-    for (base, source) in base_posed.iter().zip(source_posed) {
-        let d = distances(base, source);
+    for d in per_pose {
         let top = d.iter().copied().fold(0.0f32, f32::max);
         if top > worst.0 {
             worst = (top, d);

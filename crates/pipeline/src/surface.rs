@@ -51,7 +51,8 @@ pub fn point_triangle_distance_squared(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f3
     }
     let denom = va + vb + vc;
     if denom == 0.0 || !denom.is_finite() {
-        return ap.length_squared()
+        return ap
+            .length_squared()
             .min(bp.length_squared())
             .min(cp.length_squared());
     }

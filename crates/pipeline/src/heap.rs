@@ -75,24 +75,29 @@ pub fn warmed_pool_builder() -> rayon::ThreadPoolBuilder {
     })
 }
 
-/// Allocates a block of `bytes` without touching it, advises the kernel to back its whole 2 MiB
-/// pages with transparent huge pages (Linux, `madvise(MADV_HUGEPAGE)`: on systems whose
-/// `transparent_hugepage/enabled` is `madvise` or `always`), and frees it. The block stays in the
-/// heap it came from, and the allocations after it reuse its memory: where they first touch a
-/// page of it, the kernel faults in 2 MiB at once. Nothing is touched here, so nothing is faulted
-/// in; the advice changes how pages are backed, never what they hold.
+/// Allocates [`RESERVED_BLOCKS`] blocks of `bytes` without touching them, advises the kernel to
+/// back their whole 2 MiB pages with transparent huge pages (Linux, `madvise(MADV_HUGEPAGE)`: on
+/// systems whose `transparent_hugepage/enabled` is `madvise` or `always`), and frees them. The
+/// blocks stay in the heap they came from, and the allocations after them reuse their memory:
+/// where they first touch a page of it, the kernel faults in 2 MiB at once. Nothing is touched
+/// here, so nothing is faulted in; the advice changes how pages are backed, never what they hold.
 ///
 /// Why: a convert of a 23 s capture at 120 Hz (cmu_01_01.glb, `--effort fast`) faulted in about
 /// 14,000 pages, a third of its processor time in the kernel; with the heap's memory advised,
-/// about 500 (docs/performance.md, session 37).
+/// about 2,000 (docs/performance.md, session 37).
+///
+/// A block the allocator refuses (a system that commits memory strictly, many workers) is left
+/// out: the warm-up is a hint, never a reason to stop.
 fn reserve(bytes: usize) {
-    let blocks: Vec<Vec<u8>> = (0..RESERVED_BLOCKS)
-        .map(|_| {
-            let block = Vec::<u8>::with_capacity(bytes);
-            advise_huge_pages(block.as_ptr(), block.capacity());
-            block
-        })
-        .collect();
+    let mut blocks: Vec<Vec<u8>> = Vec::with_capacity(RESERVED_BLOCKS);
+    for _ in 0..RESERVED_BLOCKS {
+        let mut block = Vec::<u8>::new();
+        if block.try_reserve_exact(bytes).is_err() {
+            break;
+        }
+        advise_huge_pages(block.as_ptr(), block.capacity());
+        blocks.push(block);
+    }
     drop(std::hint::black_box(blocks));
 }
 

@@ -336,7 +336,7 @@ pub fn pack(
         for c in 0..comps {
             if rotation_starts[c] {
                 if fixed.get(r).is_none_or(|&i| i > 3) {
-                    writes.push((c, off[c] - 2, Some(r)));
+                    writes.push((c, off[c] - ROTATION_INDEX_BITS, Some(r)));
                 }
                 r += 1;
             }
@@ -351,7 +351,7 @@ pub fn pack(
                     Some(r) => put(
                         base + at as usize,
                         u32::from(index[(first + k) * rotations + r]),
-                        2,
+                        ROTATION_INDEX_BITS,
                     ),
                     None => put(
                         base + at as usize,

@@ -1,6 +1,6 @@
 //! The heap the `sinew` binary works in, prepared as the process and each worker thread start:
 //! with glibc's allocator, blocks up to 32 MiB come from the heap and stay there once freed, and
-//! a block of the heap as large as most converts need is set aside for transparent huge pages, so
+//! as much of each heap as most converts need is set aside for transparent huge pages, so
 //! that the memory a long clip's encoder touches first is faulted in 2 MiB at a time instead of
 //! 4 KiB (docs/performance.md, sessions 17, 25 and 37).
 
@@ -8,7 +8,6 @@
 /// `M_MMAP_THRESHOLD` may be on a 64-bit system). A long clip's encoder state is megabytes, built
 /// and dropped many times: from the heap, its pages are faulted in once and then reused; mapped
 /// alone, every build faults them in again.
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
 const MMAP_THRESHOLD: usize = 32 << 20;
 
 /// What glibc keeps of a heap's free top before it gives memory back (`M_TRIM_THRESHOLD`): twice
@@ -22,7 +21,7 @@ pub const WARM_HEAP_BYTES: usize = 30 << 20;
 /// The block of [`warm_thread_heap`]: 30 MiB, as [`WARM_HEAP_BYTES`], within a glibc arena heap's
 /// 64 MiB.
 pub const WARM_THREAD_HEAP_BYTES: usize = 30 << 20;
-const _: () = assert!(WARM_THREAD_HEAP_BYTES < 32 << 20 && WARM_HEAP_BYTES < 32 << 20);
+const _: () = assert!(WARM_THREAD_HEAP_BYTES < MMAP_THRESHOLD && WARM_HEAP_BYTES < MMAP_THRESHOLD);
 
 /// The size transparent huge pages come in where the advice is given (x86-64, and arm64 with 4 KiB
 /// pages).
@@ -30,11 +29,11 @@ const _: () = assert!(WARM_THREAD_HEAP_BYTES < 32 << 20 && WARM_HEAP_BYTES < 32 
 const HUGE_PAGE: usize = 2 << 20;
 
 /// At the start of the process: with glibc, raises its mmap threshold to 32 MiB and its trim
-/// threshold to 64 MiB (mallopt(3)), then sets aside [`WARM_HEAP_BYTES`] of the main heap for
-/// huge pages ([`reserve`]). Before session 37 a freed 16 MiB block raised the threshold to 16 MiB
+/// threshold to 64 MiB (mallopt(3)), then sets aside [`RESERVED_BLOCKS`] blocks of
+/// [`WARM_HEAP_BYTES`] of the main heap for huge pages ([`reserve`]). Before session 37 a freed 16 MiB block raised the threshold to 16 MiB
 /// through glibc's dynamic adjustment (session 17): a process that builds and drops many states
 /// of a few hundred kilobytes pays a page fault for each page once instead of on every reuse. With
-/// another allocator it is one allocation and the advice. The `sinew` binary calls it first unless
+/// another allocator it is the allocations and the advice. The `sinew` binary calls it first unless
 /// `SINEW_NO_WARM_HEAP` is set (for measuring), as does the encoder's timing example.
 pub fn warm_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
@@ -57,8 +56,8 @@ pub fn heap_warming() -> bool {
 /// On a worker thread when it starts: [`reserve`] of [`WARM_THREAD_HEAP_BYTES`]. With glibc a
 /// thread allocates from an arena of its own, whose heap grows by making more of its reserved
 /// address space writable, by what each allocation lacks (an `mprotect` call each time, most of
-/// them one page: a Fox convert made about 300 such calls on its two workers, session 25); this
-/// block grows it once, and with the trim threshold of [`warm_heap`] it stays.
+/// them one page: a Fox convert made about 300 such calls on its two workers, session 25); these
+/// blocks grow it once, and with the trim threshold of [`warm_heap`] it stays.
 pub fn warm_thread_heap() {
     reserve(WARM_THREAD_HEAP_BYTES);
 }

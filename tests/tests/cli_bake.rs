@@ -1,7 +1,7 @@
 //! `sinew bake` and `sinew verify` end to end on corpus characters.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use std::path::Path;
 

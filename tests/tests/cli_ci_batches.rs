@@ -4,7 +4,7 @@
 //! redoes exactly the inputs whose files changed, with outputs byte-identical to a full run.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, sinew};
 use serde_json::Value;

@@ -2,7 +2,7 @@
 //! `bake` restricted to the `upper` mask of a split file, checked by `verify`.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::{inspect_json, sinew};
 use serde_json::Value;
 use std::ffi::OsStr;

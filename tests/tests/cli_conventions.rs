@@ -2,7 +2,7 @@
 //! outputs, exit codes. They run the built binary as a subprocess.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, sinew};
 use std::path::Path;

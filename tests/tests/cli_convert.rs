@@ -3,7 +3,7 @@
 //! skeleton) or from `inspect` of the *source* file, never from the conversion under test.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, inspect_json, sinew};
 use serde_json::Value;

@@ -3,7 +3,7 @@
 //! must name come from `inspect` of the source, not from the conversion under test.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::{inspect_json, sinew};
 use serde_json::Value;

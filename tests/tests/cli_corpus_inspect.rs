@@ -3,7 +3,7 @@
 //! The malformed files must fail cleanly.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, inspect_json, sinew};
 use serde_json::Value;

@@ -2,7 +2,7 @@
 //! importer, has the source's skeleton, meshes and sampled poses; the bytes are the same on every run.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::{assert_one_line_error, sinew};
 use sinew_core::format::{self, Asset};
 use sinew_core::{Clip, ClipBinding, Sampler, Skeleton, Transform};

@@ -2,7 +2,7 @@
 //! bit, folders with companions, and the errors a CI job sees.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, inspect_json, sinew};
 use serde_json::Value;

@@ -5,7 +5,7 @@
 //! transforms must match within a tight tolerance, on BVH text built here and on corpus files.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::{assert_one_line_error, sinew};
 use serde_json::Value;

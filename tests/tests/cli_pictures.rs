@@ -3,7 +3,7 @@
 //! tolerance. Regenerate the goldens with `SINEW_BLESS=1` (and look at them before committing).
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::{assert_one_line_error, sinew};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};

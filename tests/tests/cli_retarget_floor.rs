@@ -6,7 +6,7 @@
 //! above the floor for the whole clip on these pairs.
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::sinew;
 use serde_json::Value;

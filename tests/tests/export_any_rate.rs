@@ -6,7 +6,7 @@
 //! (nodes as written, no animation) is compared with the runtime's bind pose the same way.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use serde_json::Value;
 use sinew_core::format::{self, Asset};

@@ -5,7 +5,7 @@
 //! tests check the same file structure without it).
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use std::path::{Path, PathBuf};
 use std::process::Command;

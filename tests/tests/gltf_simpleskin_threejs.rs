@@ -11,7 +11,7 @@
 //! quaternion; sinew normalises), the same three.js arithmetic matches sinew within 1e-5.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use serde_json::Value;
 

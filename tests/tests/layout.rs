@@ -317,3 +317,53 @@ fn crates_depend_only_down_the_chain() {
         );
     }
 }
+
+/// Each package links its integration tests into one binary (`autotests = false`): a file in its
+/// `tests/` that is neither a `mod` of that binary's root nor a `[[test]]` of its own would never be
+/// compiled, and its tests would silently stop running.
+#[test]
+fn every_integration_test_file_is_compiled() {
+    let mut checked = 0;
+    for package in [
+        "crates/core",
+        "crates/import",
+        "crates/pipeline",
+        "fixtures/generator",
+        "tests",
+    ] {
+        let dir = root().join(package);
+        let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
+        assert!(manifest.contains("autotests = false"), "{package}");
+        // The roots: every `path = "tests/..."` of a [[test]].
+        let roots: Vec<String> = manifest
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("path = \"tests/"))
+            .map(|rest| rest.trim_end_matches('"').to_string())
+            .collect();
+        assert!(!roots.is_empty(), "{package} declares no [[test]]");
+        let declared: BTreeSet<String> = roots
+            .iter()
+            .flat_map(|r| {
+                let text = std::fs::read_to_string(dir.join("tests").join(r)).unwrap();
+                text.lines()
+                    .filter_map(|l| l.trim().strip_prefix("mod "))
+                    .map(|m| m.trim_end_matches(';').to_string())
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        for entry in std::fs::read_dir(dir.join("tests")).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            let Some(stem) = name.strip_suffix(".rs") else {
+                continue;
+            };
+            assert!(
+                roots.contains(&name) || declared.contains(stem),
+                "{package}/tests/{name} is not compiled: add `mod {stem};` to the package's test root"
+            );
+            checked += 1;
+        }
+    }
+    // 6 + 17 + 8 + 6 + 28 files and the five roots, as of session 38.
+    assert!(checked >= 70, "{checked} test files seen");
+}

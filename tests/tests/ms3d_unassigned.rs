@@ -12,7 +12,7 @@
 //! drifted up to 30 units (the root's walk).
 #![allow(clippy::unwrap_used)] // unwrap is fine in tests
 
-mod common;
+use crate::common;
 
 use common::sinew;
 use std::path::{Path, PathBuf};

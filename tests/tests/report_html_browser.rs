@@ -5,7 +5,7 @@
 //! where it fails: `.ci/run` installs Chromium when it is missing.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};

@@ -4,7 +4,7 @@
 //! Needs `python3` on PATH; without it the test says so and skips, except under CI.
 #![allow(clippy::unwrap_used)]
 
-mod common;
+use crate::common;
 use common::sinew;
 use std::path::Path;
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! Round trips, crafted files and error cases of the `.sinew` container (layout: docs/format.md).
 #![allow(clippy::unwrap_used)]
 
-mod format_support;
+use crate::format_support;
 
 use format_support::*;
 use sinew_core::format::{self, Asset, Axes, Axis, FormatErrorKind as K, Tag};

@@ -1,7 +1,7 @@
 //! Damaged `.sinew` files: bit flips and random mutations are rejected or read back, never panic.
 #![allow(clippy::unwrap_used)]
 
-mod format_support;
+use crate::format_support;
 
 use format_support::*;
 use proptest::prelude::*;

@@ -1,7 +1,7 @@
 //! The `GAME` section (format 1.3): round trip, the documented byte layout, and damaged records.
 #![allow(clippy::unwrap_used)]
 
-mod format_support;
+use crate::format_support;
 
 use format_support::*;
 use sinew_core::format::game::{

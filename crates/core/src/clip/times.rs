@@ -54,7 +54,13 @@ fn merge(a: &[f32], b: &[f32]) -> Vec<f32> {
     };
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
-        if b[j].total_cmp(&a[i]) == Ordering::Less {
+        // The same time in both lists, as channels sampled alike mostly are: kept once, both
+        // passed (the second push would be dropped as `==` anyway; not a NaN, which `==` keeps).
+        if a[i] == b[j] && a[i].to_bits() == b[j].to_bits() {
+            push(a[i]);
+            i += 1;
+            j += 1;
+        } else if b[j].total_cmp(&a[i]) == Ordering::Less {
             push(b[j]);
             j += 1;
         } else {

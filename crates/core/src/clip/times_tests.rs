@@ -40,12 +40,15 @@ fn signed_zeros_keep_the_first_in_total_order_from_either_list() {
 #[test]
 fn unsorted_lists_and_nans_give_what_the_sort_gives() {
     let nan = f32::from_bits(0x7fc0_0001);
-    let cases: [&[&[f32]]; 4] = [
+    let cases: [&[&[f32]]; 5] = [
         &[&[1.0, 0.5], &[0.25]],
         &[&[0.0, nan], &[nan, 2.0]],
         &[&[1.0, 1.0, 2.0], &[1.0]],
         &[&[f32::NEG_INFINITY, 0.0], &[-1.0, f32::INFINITY]],
+        // Sorted lists sharing a NaN (the same bits): the sort keeps both (NaN != NaN).
+        &[&[0.0, 1.0, nan], &[1.0, nan]],
     ];
+    assert_eq!(union_of_times(cases[4]).len(), 4);
     for lists in cases {
         assert_eq!(
             bits(&union_of_times(lists)),

@@ -30,10 +30,11 @@ const HUGE_PAGE: usize = 2 << 20;
 
 /// At the start of the process: with glibc, raises its mmap threshold to 32 MiB and its trim
 /// threshold to 64 MiB (mallopt(3)), then sets aside [`RESERVED_BLOCKS`] blocks of
-/// [`WARM_HEAP_BYTES`] of the main heap for huge pages ([`reserve`]). Before session 37 a freed 16 MiB block raised the threshold to 16 MiB
-/// through glibc's dynamic adjustment (session 17): a process that builds and drops many states
-/// of a few hundred kilobytes pays a page fault for each page once instead of on every reuse. With
-/// another allocator it is the allocations and the advice. The `sinew` binary calls it first unless
+/// [`WARM_HEAP_BYTES`] of the main heap for huge pages ([`reserve`]). Before session 37 a freed
+/// 16 MiB block raised the threshold to 16 MiB through glibc's dynamic adjustment (session 17): a
+/// process that builds and drops many states of a few hundred kilobytes pays a page fault for
+/// each page once instead of on every reuse. With another allocator it is the allocations and the
+/// advice. The `sinew` binary calls it first unless
 /// `SINEW_NO_WARM_HEAP` is set (for measuring), as does the encoder's timing example.
 pub fn warm_heap() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
